@@ -1,0 +1,34 @@
+#include "filters.hpp"
+
+#include <stdexcept>
+
+#include "flag.hpp"
+#include "gpu/gpu_filters.hpp"
+#include "naive_gather.hpp"
+
+namespace bokeh {
+
+const std::vector<FilterRegistration>& registered_filters() {
+  static const std::vector<FilterRegistration> filters = {
+      {"naive", "naive quadratic gather, N x N samples at spacing k (FLAG paper 3.1)",
+       [](const CpuFilterInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); },
+       gpu::make_naive_gpu},
+      {"flag", "FLAG: horizontal pass into a ceil(N/2)-layer 3D buffer, vertical pass (FLAG paper 3.2)",
+       [](const CpuFilterInput& in) {
+         return flag_blur(in.packed, in.options.pattern, in.options.precision, in.threads);
+       },
+       gpu::make_flag_gpu},
+  };
+  return filters;
+}
+
+const FilterRegistration& find_filter(const std::string& name) {
+  std::string known;
+  for (const auto& f : registered_filters()) {
+    if (f.name == name) return f;
+    known += (known.empty() ? "" : ", ") + f.name;
+  }
+  throw std::invalid_argument("unknown method '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace bokeh

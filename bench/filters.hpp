@@ -1,0 +1,34 @@
+#pragma once
+// The filter registry: each method is one CPU reference (kernels/) plus one GPU factory
+// (bench/gpu/, shaders/). Adding a filter is one entry in filters.cpp.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gpu/gpu_frame.hpp"
+#include "image.hpp"
+
+namespace bokeh {
+
+// Everything a CPU reference may read; the CoC pass has already run.
+struct CpuFilterInput {
+  const Image& color;      // 3ch linear
+  const Image& radius_px;  // 1ch, clamped to pattern.max_radius_px()
+  const Image& packed;     // RGBA (rgb / discrete disc area, radius px)
+  const gpu::FilterOptions& options;
+  int threads;
+};
+
+struct FilterRegistration {
+  std::string name;  // the --method value
+  std::string description;
+  std::function<Image(const CpuFilterInput&)> cpu_reference;
+  std::function<std::unique_ptr<gpu::GpuFilter>(gpu::GpuFrame&, const gpu::FilterOptions&)> make_gpu;
+};
+
+const std::vector<FilterRegistration>& registered_filters();
+// Throws std::invalid_argument listing the valid names.
+const FilterRegistration& find_filter(const std::string& name);
+
+}  // namespace bokeh

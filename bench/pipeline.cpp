@@ -1,0 +1,34 @@
+#include "pipeline.hpp"
+
+#include "coc.hpp"
+
+namespace bokeh {
+
+CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern) {
+  CocInput in;
+  in.radius_px = coc_radius_image(depth_m, lens, pattern.max_radius_px());
+  in.packed = pack_gather_input(color, in.radius_px, pattern);
+  return in;
+}
+
+Image run_cpu(const FilterRegistration& filter, const Image& color, const Image& depth_m, const Lens& lens,
+              const gpu::FilterOptions& options, int threads) {
+  validate(options.pattern);
+  const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern);
+  return filter.cpu_reference({color, coc.radius_px, coc.packed, options, threads});
+}
+
+Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& color, const Image& depth_m,
+              const Lens& lens, const gpu::FilterOptions& options, std::vector<vk::PassTime>* pass_times) {
+  validate(options.pattern);
+  coc_radius_image(depth_m, lens, options.pattern.max_radius_px());  // validates depth and lens with clear errors
+  gpu::GpuFrame frame(ctx, color, depth_m, lens, options.pattern);
+  auto gpu_filter = filter.make_gpu(frame, options);
+  vk::TimestampQueries timer(ctx, 16);
+  gpu::warm_up(frame, *gpu_filter, timer);
+  auto times = gpu::run_frame(frame, *gpu_filter, timer);
+  if (pass_times) *pass_times = std::move(times);
+  return frame.read_output();
+}
+
+}  // namespace bokeh

@@ -1,0 +1,24 @@
+#pragma once
+// scene (colour + depth) -> circle of confusion -> filter passes, on the CPU or the GPU.
+#include <vector>
+
+#include "filters.hpp"
+#include "lens.hpp"
+#include "vk/context.hpp"
+
+namespace bokeh {
+
+struct CocInput {
+  Image radius_px;  // clamped to the pattern's max radius
+  Image packed;     // (rgb / discrete disc area, radius)
+};
+CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern);
+
+Image run_cpu(const FilterRegistration& filter, const Image& color, const Image& depth_m, const Lens& lens,
+              const gpu::FilterOptions& options, int threads);
+
+// One GPU frame (warmed up first). `pass_times` receives per-pass milliseconds if given.
+Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& color, const Image& depth_m,
+              const Lens& lens, const gpu::FilterOptions& options, std::vector<vk::PassTime>* pass_times = nullptr);
+
+}  // namespace bokeh

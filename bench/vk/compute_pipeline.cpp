@@ -1,0 +1,123 @@
+#include "compute_pipeline.hpp"
+
+#include <stdexcept>
+
+#include "vk_check.hpp"
+
+namespace bokeh::vk {
+
+namespace {
+
+// Every shader declares local_size_x_id = 100 and local_size_y_id = 101 so the host knows them.
+constexpr std::uint32_t kLocalSizeXId = 100, kLocalSizeYId = 101;
+
+}  // namespace
+
+ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
+                                 std::vector<VkDescriptorType> bindings, std::uint32_t push_constant_bytes,
+                                 std::vector<std::int32_t> specialization)
+    : ctx_(ctx), push_constant_bytes_(push_constant_bytes) {
+  const VkDevice device = ctx.device();
+  std::vector<VkDescriptorSetLayoutBinding> layout_bindings;
+  for (std::uint32_t i = 0; i < bindings.size(); ++i)
+    layout_bindings.push_back({i, bindings[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
+  VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  set_info.bindingCount = static_cast<std::uint32_t>(layout_bindings.size());
+  set_info.pBindings = layout_bindings.data();
+  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateDescriptorSetLayout(device, &set_info, nullptr, &set_layout));
+  set_layout_ = {set_layout, [device](VkDescriptorSetLayout l) { vkDestroyDescriptorSetLayout(device, l, nullptr); }};
+
+  const VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes};
+  VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  layout_info.setLayoutCount = 1;
+  layout_info.pSetLayouts = &set_layout;
+  layout_info.pushConstantRangeCount = push_constant_bytes > 0 ? 1 : 0;
+  layout_info.pPushConstantRanges = &range;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VK_CHECK(vkCreatePipelineLayout(device, &layout_info, nullptr, &layout));
+  layout_ = {layout, [device](VkPipelineLayout l) { vkDestroyPipelineLayout(device, l, nullptr); }};
+
+  VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  module_info.codeSize = spirv.size_bytes();
+  module_info.pCode = spirv.data();
+  VkShaderModule module = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateShaderModule(device, &module_info, nullptr, &module));
+  Handle<VkShaderModule> module_owner(module, [device](VkShaderModule m) { vkDestroyShaderModule(device, m, nullptr); });
+
+  // Specialization: user constants at ids 0.., then the workgroup size.
+  std::vector<std::int32_t> values = specialization;
+  values.push_back(static_cast<std::int32_t>(local_size_x_));
+  values.push_back(static_cast<std::int32_t>(local_size_y_));
+  std::vector<VkSpecializationMapEntry> entries;
+  for (std::uint32_t i = 0; i < specialization.size(); ++i) entries.push_back({i, i * 4u, 4});
+  entries.push_back({kLocalSizeXId, static_cast<std::uint32_t>(specialization.size()) * 4u, 4});
+  entries.push_back({kLocalSizeYId, static_cast<std::uint32_t>(specialization.size() + 1) * 4u, 4});
+  VkSpecializationInfo spec{static_cast<std::uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
+
+  VkComputePipelineCreateInfo pipeline_info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  pipeline_info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  pipeline_info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  pipeline_info.stage.module = module;
+  pipeline_info.stage.pName = "main";
+  pipeline_info.stage.pSpecializationInfo = &spec;
+  pipeline_info.layout = layout;
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipeline_info, nullptr, &pipeline));
+  pipeline_ = {pipeline, [device](VkPipeline p) { vkDestroyPipeline(device, p, nullptr); }};
+
+  std::vector<VkDescriptorPoolSize> sizes;
+  for (VkDescriptorType type : bindings) sizes.push_back({type, 1});
+  VkDescriptorPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  pool_info.maxSets = 1;
+  pool_info.poolSizeCount = static_cast<std::uint32_t>(sizes.size());
+  pool_info.pPoolSizes = sizes.data();
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateDescriptorPool(device, &pool_info, nullptr, &pool));
+  pool_ = {pool, [device](VkDescriptorPool p) { vkDestroyDescriptorPool(device, p, nullptr); }};
+
+  VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  alloc.descriptorPool = pool;
+  alloc.descriptorSetCount = 1;
+  alloc.pSetLayouts = &set_layout;
+  VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &set_));
+}
+
+void ComputePipeline::bind(std::uint32_t binding, const Buffer& buffer) {
+  const VkDescriptorBufferInfo info{buffer.get(), 0, VK_WHOLE_SIZE};
+  VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  write.dstSet = set_;
+  write.dstBinding = binding;
+  write.descriptorCount = 1;
+  write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  write.pBufferInfo = &info;
+  vkUpdateDescriptorSets(ctx_.device(), 1, &write, 0, nullptr);
+}
+
+void ComputePipeline::bind(std::uint32_t binding, const StorageImage3D& image) {
+  const VkDescriptorImageInfo info{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL};
+  VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  write.dstSet = set_;
+  write.dstBinding = binding;
+  write.descriptorCount = 1;
+  write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+  write.pImageInfo = &info;
+  vkUpdateDescriptorSets(ctx_.device(), 1, &write, 0, nullptr);
+}
+
+void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,
+                               std::uint32_t invocations_y) const {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
+  if (push_constant_bytes_ > 0)
+    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_, push_constants);
+  vkCmdDispatch(cmd, (invocations_x + local_size_x_ - 1) / local_size_x_,
+                (invocations_y + local_size_y_ - 1) / local_size_y_, 1);
+  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier,
+                       0, nullptr, 0, nullptr);
+}
+
+}  // namespace bokeh::vk

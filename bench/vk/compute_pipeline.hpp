@@ -1,0 +1,40 @@
+#pragma once
+// A compute shader with its descriptor set (storage buffers and storage images, in binding
+// order), push constants and integer specialization constants.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "context.hpp"
+#include "handle.hpp"
+#include "memory.hpp"
+
+namespace bokeh::vk {
+
+class ComputePipeline {
+ public:
+  ComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv, std::vector<VkDescriptorType> bindings,
+                  std::uint32_t push_constant_bytes, std::vector<std::int32_t> specialization = {});
+
+  void bind(std::uint32_t binding, const Buffer& buffer);
+  void bind(std::uint32_t binding, const StorageImage3D& image);
+
+  // Binds, pushes constants, dispatches enough workgroups to cover `invocations`, and ends with a
+  // barrier so the next pass sees this pass's writes.
+  void dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,
+                std::uint32_t invocations_y) const;
+
+ private:
+  Context& ctx_;
+  std::uint32_t push_constant_bytes_;
+  std::uint32_t local_size_x_ = 8, local_size_y_ = 8;
+  Handle<VkDescriptorSetLayout> set_layout_;
+  Handle<VkPipelineLayout> layout_;
+  Handle<VkPipeline> pipeline_;
+  Handle<VkDescriptorPool> pool_;
+  VkDescriptorSet set_ = VK_NULL_HANDLE;
+};
+
+}  // namespace bokeh::vk

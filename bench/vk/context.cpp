@@ -1,0 +1,198 @@
+#include "context.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "vk_check.hpp"
+
+namespace bokeh::vk {
+
+namespace {
+
+Handle<VkInstance> create_instance() {
+  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = "bokehbench";
+  app.apiVersion = VK_API_VERSION_1_2;
+  VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  info.pApplicationInfo = &app;
+  VkInstance instance = VK_NULL_HANDLE;
+  const VkResult result = vkCreateInstance(&info, nullptr, &instance);
+  if (result == VK_ERROR_INCOMPATIBLE_DRIVER)
+    throw std::runtime_error(
+        "no Vulkan driver found: install mesa-vulkan-drivers (lavapipe) or your GPU's Vulkan driver");
+  VK_CHECK(result);
+  return {instance, [](VkInstance i) { vkDestroyInstance(i, nullptr); }};
+}
+
+std::vector<VkPhysicalDevice> physical_devices(VkInstance instance) {
+  std::uint32_t count = 0;
+  VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
+  std::vector<VkPhysicalDevice> devices(count);
+  VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, devices.data()));
+  return devices;
+}
+
+std::string type_name(VkPhysicalDeviceType type) {
+  switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
+    default: return "other";
+  }
+}
+
+int preference(const DeviceInfo& d) {
+  const char* order[] = {"discrete", "integrated", "virtual", "other", "cpu"};
+  return static_cast<int>(std::find(std::begin(order), std::end(order), d.type) - std::begin(order));
+}
+
+DeviceInfo describe(VkPhysicalDevice device, int index) {
+  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+  VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  props.pNext = &driver;
+  vkGetPhysicalDeviceProperties2(device, &props);
+  const auto& p = props.properties;
+  DeviceInfo info;
+  info.index = index;
+  info.name = p.deviceName;
+  info.type = type_name(p.deviceType);
+  info.api_version = fmt::format("{}.{}.{}", VK_API_VERSION_MAJOR(p.apiVersion), VK_API_VERSION_MINOR(p.apiVersion),
+                                 VK_API_VERSION_PATCH(p.apiVersion));
+  info.driver_name = driver.driverName;
+  info.driver_info = driver.driverInfo;
+  info.vendor_id = p.vendorID;
+  info.device_id = p.deviceID;
+  info.timestamp_period_ns = p.limits.timestampPeriod;
+  info.max_storage_buffer_range_bytes = p.limits.maxStorageBufferRange;
+  info.max_image_dimension_3d = p.limits.maxImageDimension3D;
+
+  std::uint32_t family_count = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(device, &family_count, nullptr);
+  std::vector<VkQueueFamilyProperties> families(family_count);
+  vkGetPhysicalDeviceQueueFamilyProperties(device, &family_count, families.data());
+  for (const auto& f : families)
+    if (f.queueFlags & VK_QUEUE_COMPUTE_BIT) {
+      info.timestamp_valid_bits = f.timestampValidBits;
+      break;
+    }
+  VkPhysicalDeviceMemoryProperties memory{};
+  vkGetPhysicalDeviceMemoryProperties(device, &memory);
+  for (std::uint32_t h = 0; h < memory.memoryHeapCount; ++h)
+    if (memory.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+      info.device_local_heap_bytes = std::max<std::uint64_t>(info.device_local_heap_bytes, memory.memoryHeaps[h].size);
+  return info;
+}
+
+}  // namespace
+
+std::vector<DeviceInfo> list_devices() {
+  Handle<VkInstance> instance = create_instance();
+  std::vector<DeviceInfo> infos;
+  const auto devices = physical_devices(instance);
+  for (std::size_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], static_cast<int>(i)));
+  return infos;
+}
+
+Context::Context(const std::string& selector) : instance_(create_instance()) {
+  const auto devices = physical_devices(instance_);
+  if (devices.empty()) throw std::runtime_error("the Vulkan loader reports no devices (is mesa-vulkan-drivers installed?)");
+  std::vector<DeviceInfo> infos;
+  for (std::size_t i = 0; i < devices.size(); ++i) infos.push_back(describe(devices[i], static_cast<int>(i)));
+
+  const DeviceInfo* chosen = nullptr;
+  if (selector.empty()) {
+    chosen = &*std::min_element(infos.begin(), infos.end(),
+                                [](const auto& a, const auto& b) { return preference(a) < preference(b); });
+  } else if (std::all_of(selector.begin(), selector.end(), ::isdigit)) {
+    const int index = std::stoi(selector);
+    if (index < 0 || index >= static_cast<int>(infos.size()))
+      throw std::invalid_argument(fmt::format("--device {}: only {} device(s), see `bokehbench devices`", index, infos.size()));
+    chosen = &infos[index];
+  } else {
+    for (const auto& d : infos)
+      if (d.name.find(selector) != std::string::npos) {
+        chosen = &d;
+        break;
+      }
+    if (!chosen) throw std::invalid_argument(fmt::format("--device '{}' matches no device, see `bokehbench devices`", selector));
+  }
+  info_ = *chosen;
+  physical_ = devices[info_.index];
+  vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
+
+  std::uint32_t family_count = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &family_count, nullptr);
+  std::vector<VkQueueFamilyProperties> families(family_count);
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &family_count, families.data());
+  auto family = std::find_if(families.begin(), families.end(),
+                             [](const auto& f) { return (f.queueFlags & VK_QUEUE_COMPUTE_BIT) && f.timestampValidBits > 0; });
+  if (family == families.end())
+    throw std::runtime_error(fmt::format("device '{}' has no compute queue with timestamps", info_.name));
+  queue_family_ = static_cast<std::uint32_t>(family - families.begin());
+
+  const float priority = 1.0f;
+  VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  queue_info.queueFamilyIndex = queue_family_;
+  queue_info.queueCount = 1;
+  queue_info.pQueuePriorities = &priority;
+  VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  device_info.queueCreateInfoCount = 1;
+  device_info.pQueueCreateInfos = &queue_info;
+  VkPhysicalDeviceFeatures features{};
+  device_info.pEnabledFeatures = &features;
+  VkDevice device = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateDevice(physical_, &device_info, nullptr, &device));
+  device_ = Handle<VkDevice>(device, [](VkDevice d) { vkDestroyDevice(d, nullptr); });
+  vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+
+  VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pool_info.queueFamilyIndex = queue_family_;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateCommandPool(device_, &pool_info, nullptr, &pool));
+  command_pool_ = Handle<VkCommandPool>(pool, [d = device](VkCommandPool p) { vkDestroyCommandPool(d, p, nullptr); });
+
+  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  alloc.commandPool = command_pool_;
+  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  alloc.commandBufferCount = 1;
+  VK_CHECK(vkAllocateCommandBuffers(device_, &alloc, &command_buffer_));
+
+  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence fence = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateFence(device_, &fence_info, nullptr, &fence));
+  fence_ = Handle<VkFence>(fence, [d = device](VkFence f) { vkDestroyFence(d, f, nullptr); });
+}
+
+Context::~Context() {
+  if (device_.get() != VK_NULL_HANDLE) vkDeviceWaitIdle(device_);
+}
+
+void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record) {
+  VK_CHECK(vkResetCommandBuffer(command_buffer_, 0));
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VK_CHECK(vkBeginCommandBuffer(command_buffer_, &begin));
+  record(command_buffer_);
+  VK_CHECK(vkEndCommandBuffer(command_buffer_));
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &command_buffer_;
+  VkFence fence = fence_;
+  VK_CHECK(vkResetFences(device_, 1, &fence));
+  VK_CHECK(vkQueueSubmit(queue_, 1, &submit, fence));
+  VK_CHECK(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
+}
+
+std::uint32_t Context::find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted,
+                                        VkMemoryPropertyFlags fallback) const {
+  for (VkMemoryPropertyFlags flags : {wanted, fallback})
+    for (std::uint32_t i = 0; i < memory_.memoryTypeCount; ++i)
+      if ((type_bits & (1u << i)) && (memory_.memoryTypes[i].propertyFlags & flags) == flags) return i;
+  throw std::runtime_error("no suitable Vulkan memory type");
+}
+
+}  // namespace bokeh::vk

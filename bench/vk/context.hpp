@@ -1,0 +1,67 @@
+#pragma once
+// The one Vulkan context: instance, the chosen physical device, a compute queue, and a command
+// buffer for synchronous submissions. Everything GPU-side borrows it.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "handle.hpp"
+
+namespace bokeh::vk {
+
+struct DeviceInfo {
+  int index = -1;
+  std::string name;
+  std::string type;  // discrete, integrated, virtual, cpu, other
+  std::string api_version;
+  std::string driver_name;  // e.g. llvmpipe
+  std::string driver_info;  // e.g. "Mesa 22.3.6 (LLVM 15.0.6)"
+  std::uint32_t vendor_id = 0, device_id = 0;
+  double timestamp_period_ns = 0;
+  std::uint32_t timestamp_valid_bits = 0;
+  std::uint64_t max_storage_buffer_range_bytes = 0;
+  std::uint32_t max_image_dimension_3d = 0;
+  std::uint64_t device_local_heap_bytes = 0;
+  bool is_software() const { return type == "cpu"; }
+};
+
+// All devices the loader reports, in the order `--device INDEX` uses.
+std::vector<DeviceInfo> list_devices();
+
+class Context {
+ public:
+  // selector: "" picks the best (discrete > integrated > virtual > cpu); a number picks that index;
+  // anything else picks the first device whose name contains it. Throws if nothing matches.
+  explicit Context(const std::string& selector = "");
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  const DeviceInfo& info() const { return info_; }
+  VkDevice device() const { return device_; }
+  VkPhysicalDevice physical_device() const { return physical_; }
+
+  // Records with `record`, submits, and waits: lavapipe runs dispatches synchronously anyway, and
+  // a benchmark wants each frame finished before it reads the timestamps.
+  void submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
+
+  std::uint32_t find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted,
+                                 VkMemoryPropertyFlags fallback) const;
+
+ private:
+  Handle<VkInstance> instance_;
+  VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+  Handle<VkDevice> device_;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  std::uint32_t queue_family_ = 0;
+  Handle<VkCommandPool> command_pool_;
+  VkCommandBuffer command_buffer_ = VK_NULL_HANDLE;
+  Handle<VkFence> fence_;
+  DeviceInfo info_;
+  VkPhysicalDeviceMemoryProperties memory_{};
+};
+
+}  // namespace bokeh::vk

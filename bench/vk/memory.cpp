@@ -1,0 +1,144 @@
+#include "memory.hpp"
+
+#include <cstring>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "vk_check.hpp"
+
+namespace bokeh::vk {
+
+namespace {
+
+Handle<VkDeviceMemory> allocate(Context& ctx, const VkMemoryRequirements& req, VkMemoryPropertyFlags wanted,
+                                VkMemoryPropertyFlags fallback) {
+  VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  info.allocationSize = req.size;
+  info.memoryTypeIndex = ctx.find_memory_type(req.memoryTypeBits, wanted, fallback);
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  VK_CHECK(vkAllocateMemory(ctx.device(), &info, nullptr, &memory));
+  return {memory, [d = ctx.device()](VkDeviceMemory m) { vkFreeMemory(d, m, nullptr); }};
+}
+
+VkImageCreateInfo image_3d_info(VkFormat format, std::uint32_t width, std::uint32_t height, std::uint32_t depth) {
+  VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  info.imageType = VK_IMAGE_TYPE_3D;
+  info.format = format;
+  info.extent = {width, height, depth};
+  info.mipLevels = 1;
+  info.arrayLayers = 1;
+  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = VK_IMAGE_USAGE_STORAGE_BIT;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  return info;
+}
+
+Handle<VkImage> create_image_3d(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
+                                std::uint32_t depth) {
+  const std::uint32_t limit = ctx.info().max_image_dimension_3d;
+  if (width > limit || height > limit || depth > limit)
+    throw std::runtime_error(fmt::format("3D buffer {}x{}x{} exceeds the device's maxImageDimension3D {}", width,
+                                         height, depth, limit));
+  const VkImageCreateInfo info = image_3d_info(format, width, height, depth);
+  VkImage image = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateImage(ctx.device(), &info, nullptr, &image));
+  return {image, [d = ctx.device()](VkImage i) { vkDestroyImage(d, i, nullptr); }};
+}
+
+}  // namespace
+
+Buffer::Buffer(Context& ctx, VkDeviceSize bytes, VkBufferUsageFlags usage, Where where) : bytes_(bytes) {
+  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = bytes;
+  info.usage = usage;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateBuffer(ctx.device(), &info, nullptr, &buffer));
+  buffer_ = Handle<VkBuffer>(buffer, [d = ctx.device()](VkBuffer b) { vkDestroyBuffer(d, b, nullptr); });
+
+  VkMemoryRequirements req{};
+  vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
+  allocated_bytes_ = req.size;
+  const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  memory_ = where == Where::host
+                ? allocate(ctx, req, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, host)
+                : allocate(ctx, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
+  if (where == Where::host) VK_CHECK(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+}
+
+Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what) {
+  const auto limit = ctx.info().max_storage_buffer_range_bytes;
+  if (bytes > limit)
+    throw std::runtime_error(fmt::format("{} needs {:.1f} MiB, over the device's maxStorageBufferRange of {:.1f} MiB",
+                                         what, bytes / 1048576.0, limit / 1048576.0));
+  return Buffer(ctx, bytes,
+                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+}
+
+void upload(Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes) {
+  Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, Buffer::Where::host);
+  std::memcpy(staging.mapped(), data, bytes);
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    const VkBufferCopy region{0, 0, bytes};
+    vkCmdCopyBuffer(cmd, staging.get(), dst.get(), 1, &region);
+  });
+}
+
+void download(Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes) {
+  Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, Buffer::Where::host);
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier, 0,
+                         nullptr, 0, nullptr);
+    const VkBufferCopy region{0, 0, bytes};
+    vkCmdCopyBuffer(cmd, src.get(), staging.get(), 1, &region);
+  });
+  std::memcpy(data, staging.mapped(), bytes);
+}
+
+StorageImage3D::StorageImage3D(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
+                               std::uint32_t depth)
+    : image_(create_image_3d(ctx, format, width, height, depth)) {
+  VkMemoryRequirements req{};
+  vkGetImageMemoryRequirements(ctx.device(), image_, &req);
+  allocated_bytes_ = req.size;
+  memory_ = allocate(ctx, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
+
+  VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  view_info.image = image_;
+  view_info.viewType = VK_IMAGE_VIEW_TYPE_3D;
+  view_info.format = format;
+  view_info.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  VkImageView view = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateImageView(ctx.device(), &view_info, nullptr, &view));
+  view_ = Handle<VkImageView>(view, [d = ctx.device()](VkImageView v) { vkDestroyImageView(d, v, nullptr); });
+
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    barrier.srcAccessMask = 0;
+    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    barrier.newLayout = VK_IMAGE_LAYOUT_GENERAL;
+    barrier.srcQueueFamilyIndex = barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    barrier.image = image_;
+    barrier.subresourceRange = view_info.subresourceRange;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0,
+                         nullptr, 1, &barrier);
+  });
+}
+
+VkDeviceSize image_3d_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
+                                        std::uint32_t depth) {
+  Handle<VkImage> image = create_image_3d(ctx, format, width, height, depth);
+  VkMemoryRequirements req{};
+  vkGetImageMemoryRequirements(ctx.device(), image, &req);
+  return req.size;
+}
+
+}  // namespace bokeh::vk

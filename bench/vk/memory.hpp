@@ -1,0 +1,54 @@
+#pragma once
+// Device memory for buffers and storage images, and host transfers through a staging buffer.
+#include <cstdint>
+
+#include <vulkan/vulkan.h>
+
+#include "context.hpp"
+#include "handle.hpp"
+
+namespace bokeh::vk {
+
+class Buffer {
+ public:
+  enum class Where { device, host };  // host: mappable, for staging and readback
+  Buffer(Context& ctx, VkDeviceSize bytes, VkBufferUsageFlags usage, Where where = Where::device);
+
+  VkBuffer get() const { return buffer_; }
+  VkDeviceSize bytes() const { return bytes_; }
+  VkDeviceSize allocated_bytes() const { return allocated_bytes_; }
+  void* mapped() const { return mapped_; }
+
+ private:
+  Handle<VkBuffer> buffer_;
+  Handle<VkDeviceMemory> memory_;
+  VkDeviceSize bytes_ = 0, allocated_bytes_ = 0;
+  void* mapped_ = nullptr;
+};
+
+// A storage buffer: checks the device's maxStorageBufferRange (128 MiB on lavapipe) up front.
+Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what);
+
+void upload(Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes);
+void download(Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes);
+
+// A 3D storage image in VK_IMAGE_LAYOUT_GENERAL, as FLAG's layer buffer.
+class StorageImage3D {
+ public:
+  StorageImage3D(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height, std::uint32_t depth);
+
+  VkImageView view() const { return view_; }
+  VkDeviceSize allocated_bytes() const { return allocated_bytes_; }
+
+ private:
+  Handle<VkImage> image_;
+  Handle<VkDeviceMemory> memory_;
+  Handle<VkImageView> view_;
+  VkDeviceSize allocated_bytes_ = 0;
+};
+
+// What the driver would allocate for such an image (vkGetImageMemoryRequirements), without allocating.
+VkDeviceSize image_3d_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
+                                        std::uint32_t depth);
+
+}  // namespace bokeh::vk

@@ -1,0 +1,51 @@
+#include "timestamps.hpp"
+
+#include <stdexcept>
+
+#include "vk_check.hpp"
+
+namespace bokeh::vk {
+
+TimestampQueries::TimestampQueries(Context& ctx, std::uint32_t capacity) : ctx_(ctx), capacity_(capacity) {
+  VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  info.queryCount = capacity;
+  VkQueryPool pool = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateQueryPool(ctx.device(), &info, nullptr, &pool));
+  pool_ = {pool, [d = ctx.device()](VkQueryPool p) { vkDestroyQueryPool(d, p, nullptr); }};
+}
+
+void TimestampQueries::begin_frame(VkCommandBuffer cmd) {
+  passes_.clear();
+  vkCmdResetQueryPool(cmd, pool_, 0, capacity_);
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, 0);
+}
+
+void TimestampQueries::end_pass(VkCommandBuffer cmd, const std::string& pass) {
+  if (passes_.size() + 1 >= capacity_) throw std::logic_error("more passes than timestamp queries");
+  passes_.push_back(pass);
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, static_cast<std::uint32_t>(passes_.size()));
+}
+
+std::vector<PassTime> TimestampQueries::read() const {
+  const std::uint32_t count = static_cast<std::uint32_t>(passes_.size()) + 1;
+  std::vector<std::uint64_t> ticks(count);
+  VK_CHECK(vkGetQueryPoolResults(ctx_.device(), pool_, 0, count, ticks.size() * sizeof(std::uint64_t), ticks.data(),
+                                 sizeof(std::uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  const std::uint32_t bits = ctx_.info().timestamp_valid_bits;
+  const std::uint64_t mask = bits >= 64 ? ~0ull : ((1ull << bits) - 1);
+  std::vector<PassTime> out;
+  for (std::size_t i = 0; i < passes_.size(); ++i) {
+    const std::uint64_t delta = (ticks[i + 1] - ticks[i]) & mask;  // wraps correctly within valid bits
+    out.push_back({passes_[i], static_cast<double>(delta) * ctx_.info().timestamp_period_ns * 1e-6});
+  }
+  return out;
+}
+
+double frame_ms(const std::vector<PassTime>& passes) {
+  double total = 0;
+  for (const auto& p : passes) total += p.ms;
+  return total;
+}
+
+}  // namespace bokeh::vk

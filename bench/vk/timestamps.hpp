@@ -1,0 +1,38 @@
+#pragma once
+// The one GPU timing path: a timestamp before the first pass and after each pass, in one
+// submission; pass times are the differences, the frame time is last minus first.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "context.hpp"
+#include "handle.hpp"
+
+namespace bokeh::vk {
+
+struct PassTime {
+  std::string pass;
+  double ms = 0;
+};
+
+class TimestampQueries {
+ public:
+  TimestampQueries(Context& ctx, std::uint32_t capacity);
+
+  void begin_frame(VkCommandBuffer cmd);                       // resets and writes the start stamp
+  void end_pass(VkCommandBuffer cmd, const std::string& pass);  // stamp once all prior work is done
+  // After the submission completed: per-pass milliseconds in recording order.
+  std::vector<PassTime> read() const;
+
+ private:
+  Context& ctx_;
+  std::uint32_t capacity_;
+  Handle<VkQueryPool> pool_;
+  std::vector<std::string> passes_;
+};
+
+double frame_ms(const std::vector<PassTime>& passes);
+
+}  // namespace bokeh::vk

@@ -1,0 +1,72 @@
+#pragma once
+// The exact reference every filter is judged against: each pixel spreads its colour uniformly over its
+// own circle of confusion (a disc with exact area-weighted coverage at its edge), either summed
+// (energy_sum) or composited front to back in depth order (depth_ordered).
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "image.hpp"
+#include "parallel.hpp"
+
+namespace bokeh {
+
+enum class ScatterComposite { energy_sum, depth_ordered };
+std::string to_string(ScatterComposite mode);
+
+// Geometry shared by both modes. Source pixel s (integer coordinates) is the unit square
+// [sx, sx+1] x [sy, sy+1]; its disc has radius r = radius_px(s) and is centred on the pixel centre.
+//   coverage_s(t) = area of (disc of s) ∩ (unit square of target pixel t), computed analytically in
+//                   double precision (exact up to rounding, ~1e-13 absolute for r <= 100; squares lying
+//                   wholly inside the disc get exactly 1).
+//   area_s        = sum over all integer pixel positions t (inside the image or not) of coverage_s(t),
+//                   i.e. pi r^2 up to rounding; summing the same coverages we spread makes every source
+//                   conserve its energy to rounding.
+//   w_s(t)        = coverage_s(t) / area_s, so sum_t w_s(t) = 1.
+// r <= 0.5 puts the disc inside its own pixel: w_s(s) = 1 and nothing else (the identity).
+//
+// energy_sum:    out(t) = sum_s w_s(t) colour(s). Contributions landing outside the image are lost.
+// depth_ordered: a source is a surface patch; w_s(t) is the fraction of target t's view through the
+//   aperture that the patch occupies. Sources are taken front to back (ascending depth_m); sources of
+//   exactly equal depth form one layer (order inside a layer does not matter). With a(t) the opacity
+//   accumulated so far, a layer L with W = sum_{s in L} w_s(t) and C = sum_{s in L} w_s(t) colour(s)
+//   adds f = min(1, (1 - a) / W) of itself:  rgb(t) += f C,  a(t) += f W.
+//   Patches of one surface occupy disjoint parts of the aperture, so their opacities add (a multiplicative
+//   "over" of the pieces would leave e^-1 of an opaque blurred surface transparent); once a target's
+//   view is full (a = 1) everything behind is hidden. Finally out(t) = rgb(t) / a(t): the parts of the
+//   view the single image cannot show (surfaces hidden in the pinhole image, or beyond its border) are
+//   filled by the visible ones in proportion. Radius 0 everywhere gives the identity: each target sees
+//   only its own pixel, with w = 1.
+//
+// color: >= 3 channels, linear RGB (channels beyond three are ignored). radius_px: 1 channel, finite
+// and >= 0. depth_m: 1 channel, finite; read only by depth_ordered (may be an empty Image otherwise).
+// Returns 3 channels. Throws std::invalid_argument on bad shapes or values. Cost grows with the sum of
+// disc areas: a 800x600 frame with radii up to 40 px takes seconds on two cores.
+Image exact_scatter(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
+                    int threads = default_cpu_threads());
+
+// FNV-1a (64 bit) over the algorithm version, mode, shapes and the bytes of colour and radius, and of
+// depth for depth_ordered: the same inputs always name the same cached reference.
+std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, const Image& depth_m,
+                                ScatterComposite mode);
+
+// EXR files (float, lossless) under `directory`, one per key, so sweeps compute each reference once.
+// Files are written under a temporary name and renamed, so concurrent processes never read half a file.
+class ExactReferenceCache {
+ public:
+  explicit ExactReferenceCache(std::filesystem::path directory = "build/reference-cache");
+
+  // The cached reference for these inputs, computed with exact_scatter and stored on a miss (or when
+  // the stored file is unreadable or of the wrong size).
+  Image get(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
+            int threads = default_cpu_threads());
+
+  std::filesystem::path path_for(const Image& color, const Image& radius_px, const Image& depth_m,
+                                 ScatterComposite mode) const;
+  const std::filesystem::path& directory() const { return directory_; }
+
+ private:
+  std::filesystem::path directory_;
+};
+
+}  // namespace bokeh

@@ -1,0 +1,96 @@
+// GPU passes against the CPU references, on small procedural scenes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "coc.hpp"
+#include "pipeline.hpp"
+#include "scene.hpp"
+
+namespace bokeh {
+namespace {
+
+// Largest per-channel difference relative to the reference's largest value.
+double max_rel_error(const Image& a, const Image& ref) {
+  double max_ref = 0, max_diff = 0;
+  for (std::size_t i = 0; i < ref.pixels.size(); ++i) {
+    max_ref = std::max(max_ref, std::abs(double(ref.pixels[i])));
+    max_diff = std::max(max_diff, std::abs(double(a.pixels[i]) - ref.pixels[i]));
+  }
+  return max_diff / max_ref;
+}
+
+vk::Context& context() {
+  static vk::Context ctx;
+  return ctx;
+}
+
+struct Case {
+  const char* scene;
+  int size_n, spacing_px;
+};
+
+class GpuMatchesCpu : public ::testing::TestWithParam<Case> {};
+
+TEST_P(GpuMatchesCpu, CocPassPacksLikeCpu) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 96, 64);
+  const GatherPattern pattern{c.size_n, c.spacing_px};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  auto filter = find_filter("naive").make_gpu(frame, {pattern, LayerPrecision::f32});
+  vk::TimestampQueries timer(context(), 8);
+  gpu::run_frame(frame, *filter, timer);
+  const Image gpu_packed = frame.read_packed();
+  const CocInput cpu = cpu_coc_pass(s.color, s.depth_m, lens, pattern);
+  for (std::size_t i = 0; i < cpu.packed.pixels.size(); ++i)
+    ASSERT_NEAR(gpu_packed.pixels[i], cpu.packed.pixels[i], 1e-6f * std::max(1.0f, std::abs(cpu.packed.pixels[i])))
+        << "texel " << i / 4 << " channel " << i % 4;
+}
+
+TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 96, 64);
+  const gpu::FilterOptions options{{c.size_n, c.spacing_px}, LayerPrecision::f32};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px() * 1.2);
+  const Image reference = run_cpu(find_filter("naive"), s.color, s.depth_m, lens, options, 2);
+  for (const char* method : {"naive", "flag"}) {
+    const Image gpu = run_gpu(context(), find_filter(method), s.color, s.depth_m, lens, options);
+    EXPECT_LT(max_rel_error(gpu, reference), 1e-5) << method;
+  }
+}
+
+// RGBA16F layers: every stored layer value is a sum of non-negative terms rounded once to half,
+// and the output is a sum of such values, so each output channel keeps the relative error of one
+// rounding: 2^-11 when rounding to nearest (the CPU emulation), 2^-10 (one ulp) when the driver
+// rounds toward zero, which Vulkan permits for float->half conversion (lavapipe does). Plus f32
+// summation noise and half's subnormal floor.
+TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 96, 64);
+  const gpu::FilterOptions f32{{c.size_n, c.spacing_px}, LayerPrecision::f32};
+  const gpu::FilterOptions f16{{c.size_n, c.spacing_px}, LayerPrecision::f16};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, f32.pattern.max_radius_px());
+  const Image reference = run_cpu(find_filter("naive"), s.color, s.depth_m, lens, f32, 2);
+  const Image gpu16 = run_gpu(context(), find_filter("flag"), s.color, s.depth_m, lens, f16);
+  const Image cpu16 = run_cpu(find_filter("flag"), s.color, s.depth_m, lens, f16, 2);
+  const double round_to_nearest = std::ldexp(1.0, -11), round_toward_zero = std::ldexp(1.0, -10);
+  for (std::size_t i = 0; i < reference.pixels.size(); ++i) {
+    const double ref = std::abs(reference.pixels[i]);
+    ASSERT_LE(std::abs(gpu16.pixels[i] - reference.pixels[i]), round_toward_zero * ref * (1 + 1e-3) + 1e-6)
+        << "GPU, value " << i;
+    ASSERT_LE(std::abs(cpu16.pixels[i] - reference.pixels[i]), round_to_nearest * ref * (1 + 1e-3) + 1e-6)
+        << "CPU f16 emulation, value " << i;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, GpuMatchesCpu,
+                         ::testing::Values(Case{"hoops", 9, 2}, Case{"pillars", 7, 3}, Case{"points", 11, 1},
+                                           Case{"hoops", 1, 2}),
+                         [](const auto& info) {
+                           return std::string(info.param.scene) + "_N" + std::to_string(info.param.size_n) + "_k" +
+                                  std::to_string(info.param.spacing_px);
+                         });
+
+}  // namespace
+}  // namespace bokeh
