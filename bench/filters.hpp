@@ -8,12 +8,15 @@
 
 #include "gpu/gpu_frame.hpp"
 #include "image.hpp"
+#include "lens.hpp"
 
 namespace bokeh {
 
 // Everything a CPU reference may read; the CoC pass has already run.
 struct CpuFilterInput {
   const Image& color;      // 3ch linear
+  const Image& depth_m;    // 1ch planar depth
+  const Lens& lens;
   const Image& radius_px;  // 1ch, clamped to pattern.max_radius_px()
   const Image& packed;     // RGBA (rgb / discrete disc area, radius px)
   const gpu::FilterOptions& options;
@@ -23,6 +26,7 @@ struct CpuFilterInput {
 struct FilterRegistration {
   std::string name;  // the --method value
   std::string description;
+  std::vector<std::string> precisions;  // accepted FilterOptions::precision values, default first
   std::function<Image(const CpuFilterInput&)> cpu_reference;
   std::function<std::unique_ptr<gpu::GpuFilter>(gpu::GpuFrame&, const gpu::FilterOptions&)> make_gpu;
 };
@@ -30,5 +34,7 @@ struct FilterRegistration {
 const std::vector<FilterRegistration>& registered_filters();
 // Throws std::invalid_argument listing the valid names.
 const FilterRegistration& find_filter(const std::string& name);
+// Throws std::invalid_argument unless `filter` accepts `precision`.
+void check_precision(const FilterRegistration& filter, const std::string& precision);
 
 }  // namespace bokeh

@@ -14,13 +14,15 @@ CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens
 Image run_cpu(const FilterRegistration& filter, const Image& color, const Image& depth_m, const Lens& lens,
               const gpu::FilterOptions& options, int threads) {
   validate(options.pattern);
+  check_precision(filter, options.precision);
   const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern);
-  return filter.cpu_reference({color, coc.radius_px, coc.packed, options, threads});
+  return filter.cpu_reference({color, depth_m, lens, coc.radius_px, coc.packed, options, threads});
 }
 
 Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& color, const Image& depth_m,
               const Lens& lens, const gpu::FilterOptions& options, std::vector<vk::PassTime>* pass_times) {
   validate(options.pattern);
+  check_precision(filter, options.precision);
   coc_radius_image(depth_m, lens, options.pattern.max_radius_px());  // validates depth and lens with clear errors
   gpu::GpuFrame frame(ctx, color, depth_m, lens, options.pattern);
   auto gpu_filter = filter.make_gpu(frame, options);

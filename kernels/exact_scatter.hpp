@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "image.hpp"
 #include "parallel.hpp"
@@ -44,6 +45,11 @@ std::string to_string(ScatterComposite mode);
 // disc areas: a 800x600 frame with radii up to 40 px takes seconds on two cores.
 Image exact_scatter(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
                     int threads = default_cpu_threads());
+
+// The same result before rounding to float: RGB interleaved, row-major, width * height * 3 doubles.
+// For checks finer than float resolution (energy conservation to 1e-9).
+std::vector<double> exact_scatter_double(const Image& color, const Image& radius_px, const Image& depth_m,
+                                         ScatterComposite mode, int threads = default_cpu_threads());
 
 // FNV-1a (64 bit) over the algorithm version, mode, shapes and the bytes of colour and radius, and of
 // depth for depth_ordered: the same inputs always name the same cached reference.

@@ -10,8 +10,9 @@ namespace bokeh {
 enum class CocModel { thin_lens, focal_plane_at_f };
 
 struct Lens {
-  double focal_length_mm = 50.0;
-  double f_stop = 2.0;  // aperture diameter A = focal_length / f_stop
+  // Defaults: a portrait lens on a full-frame sensor; the procedural scenes sit around 3 m.
+  double focal_length_mm = 85.0;
+  double f_stop = 1.4;  // aperture diameter A = focal_length / f_stop
   double sensor_width_mm = 36.0;
   double focus_distance_m = 3.0;
   CocModel model = CocModel::thin_lens;

@@ -70,7 +70,7 @@ Scene hoops(int w, int h) {
         const float shade = 0.6f + 0.4f * std::cos(12.0f * std::atan2(dy, dx));
         put(s, x, y, hp.depth_m, hp.r * shade, hp.g * shade, hp.b * shade);
       }
-  sprinkle_highlights(s, 20.0f, 100.0f, 0.004f, 40.0f, 11);  // distant lights behind everything
+  sprinkle_highlights(s, 20.0f, 100.0f, 0.0005f, 40.0f, 11);  // sparse distant lights: discs read one by one
   sprinkle_highlights(s, 0.5f, 20.0f, 0.01f, 12.0f, 23);     // glints on the hoops
   return s;
 }
@@ -100,7 +100,7 @@ Scene pillars(int w, int h) {
         put(s, x, y, depth, light * (band ? 0.8f : 0.6f), light * 0.55f, light * 0.35f);
       }
   }
-  sprinkle_highlights(s, 0.5f, 100.0f, 0.003f, 30.0f, 31);
+  sprinkle_highlights(s, 0.5f, 100.0f, 0.0006f, 30.0f, 31);
   return s;
 }
 

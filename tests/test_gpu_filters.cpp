@@ -38,7 +38,7 @@ TEST_P(GpuMatchesCpu, CocPassPacksLikeCpu) {
   const GatherPattern pattern{c.size_n, c.spacing_px};
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
   gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-  auto filter = find_filter("naive").make_gpu(frame, {pattern, LayerPrecision::f32});
+  auto filter = find_filter("naive").make_gpu(frame, {pattern, "f32"});
   vk::TimestampQueries timer(context(), 8);
   gpu::run_frame(frame, *filter, timer);
   const Image gpu_packed = frame.read_packed();
@@ -51,7 +51,7 @@ TEST_P(GpuMatchesCpu, CocPassPacksLikeCpu) {
 TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
   const Case c = GetParam();
   const Scene s = make_scene(c.scene, 96, 64);
-  const gpu::FilterOptions options{{c.size_n, c.spacing_px}, LayerPrecision::f32};
+  const gpu::FilterOptions options{{c.size_n, c.spacing_px}, "f32"};
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px() * 1.2);
   const Image reference = run_cpu(find_filter("naive"), s.color, s.depth_m, lens, options, 2);
   for (const char* method : {"naive", "flag"}) {
@@ -68,8 +68,8 @@ TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
 TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
   const Case c = GetParam();
   const Scene s = make_scene(c.scene, 96, 64);
-  const gpu::FilterOptions f32{{c.size_n, c.spacing_px}, LayerPrecision::f32};
-  const gpu::FilterOptions f16{{c.size_n, c.spacing_px}, LayerPrecision::f16};
+  const gpu::FilterOptions f32{{c.size_n, c.spacing_px}, "f32"};
+  const gpu::FilterOptions f16{{c.size_n, c.spacing_px}, "f16"};
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, f32.pattern.max_radius_px());
   const Image reference = run_cpu(find_filter("naive"), s.color, s.depth_m, lens, f32, 2);
   const Image gpu16 = run_gpu(context(), find_filter("flag"), s.color, s.depth_m, lens, f16);

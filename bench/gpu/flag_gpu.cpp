@@ -20,14 +20,16 @@ namespace {
 class Flag final : public GpuFilter {
  public:
   Flag(GpuFrame& frame, const FilterOptions& options)
+      : Flag(frame, options, layer_precision_from_string(options.precision)) {}
+  Flag(GpuFrame& frame, const FilterOptions& options, LayerPrecision precision)
       : frame_(frame),
-        layers_(frame.ctx, layer_format(options.precision), frame.width(), frame.height(),
+        layers_(frame.ctx, layer_format(precision), frame.width(), frame.height(),
                 static_cast<std::uint32_t>(options.pattern.layers())),
-        horizontal_(frame.ctx, options.precision == LayerPrecision::f32 ? std::span<const std::uint32_t>(flag_horizontal_f32_spv)
+        horizontal_(frame.ctx, precision == LayerPrecision::f32 ? std::span<const std::uint32_t>(flag_horizontal_f32_spv)
                                                                         : std::span<const std::uint32_t>(flag_horizontal_f16_spv),
                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, sizeof(PassParams),
                     {options.pattern.layers()}),
-        vertical_(frame.ctx, options.precision == LayerPrecision::f32 ? std::span<const std::uint32_t>(flag_vertical_f32_spv)
+        vertical_(frame.ctx, precision == LayerPrecision::f32 ? std::span<const std::uint32_t>(flag_vertical_f32_spv)
                                                                       : std::span<const std::uint32_t>(flag_vertical_f16_spv),
                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, sizeof(PassParams)) {
     horizontal_.bind(0, frame.packed);

@@ -24,7 +24,10 @@ struct PassParams {
 
 struct FilterOptions {
   GatherPattern pattern;
-  LayerPrecision precision = LayerPrecision::f16;
+  // Storage of the method's intermediates (FLAG: its 3D buffer); each registered filter lists the
+  // names it accepts, see FilterRegistration::precisions.
+  std::string precision = "f16";
+  int near_components = 0;  // circular filters: near-field component count (0: the method's own)
 };
 
 class GpuFrame {

@@ -1,0 +1,87 @@
+// `bokehbench memory`: FLAG's 3D buffer size in the paper's convention and as the driver allocates it.
+#include <fmt/format.h>
+
+#include "commands.hpp"
+#include "flag_memory.hpp"
+#include "gpu/gpu_filters.hpp"
+#include "report.hpp"
+#include "vk/memory.hpp"
+
+namespace bokeh {
+
+namespace {
+
+struct MemoryOptions {
+  int width_px = 1920, height_px = 1080, size_n = 41;
+  std::vector<std::string> precisions = {"f16", "f32"};
+  std::vector<int> scales = {1, 2, 4};
+  std::string device, out_path = "results/memory.json";
+};
+
+// The figures the paper prints (sections 3.2.4 and 5), for comparison only: 1080p, 41x41, RGBA16F.
+double paper_printed_mb(const MemoryOptions& o, LayerPrecision precision, int scale) {
+  if (o.width_px != 1920 || o.height_px != 1080 || o.size_n != 41 || precision != LayerPrecision::f16) return 0;
+  return scale == 1 ? 332.0 : scale == 2 ? 42.0 : 5.2;
+}
+
+void memory(const MemoryOptions& o) {
+  vk::Context ctx(o.device);
+  nlohmann::json rows = nlohmann::json::array();
+  const GatherPattern pattern{o.size_n, 2};
+  validate(pattern);
+  fmt::print("FLAG 3D buffer, {}x{}, {}x{} gather ({} layers), device {}\n", o.width_px, o.height_px, o.size_n,
+             o.size_n, pattern.layers(), ctx.info().name);
+  fmt::print("{:<9} {:<7} {:>14} {:>14} {:>16} {:>12} {:>12}\n", "precision", "scale", "buffer (texels)",
+             "paper conv MiB", "allocated MiB", "allocated B", "paper prints");
+  for (const auto& name : o.precisions) {
+    const LayerPrecision precision = layer_precision_from_string(name);
+    for (int scale : o.scales) {
+      const FlagBufferExtent extent = flag_buffer_extent(o.width_px, o.height_px, pattern, scale);
+      const double paper_bytes = flag_paper_bytes(o.width_px, o.height_px, pattern, precision, scale);
+      const auto allocated = vk::image_3d_requirement_bytes(ctx, gpu::layer_format(precision), extent.width,
+                                                            extent.height, extent.layers);
+      const double printed = paper_printed_mb(o, precision, scale);
+      fmt::print("{:<9} 1/{:<5} {:>14} {:>14.2f} {:>16.2f} {:>12} {:>12}\n", name, scale,
+                 fmt::format("{}x{}x{}", extent.width, extent.height, extent.layers), paper_bytes / kMiB,
+                 allocated / kMiB, allocated, printed > 0 ? fmt::format("{} MB", printed) : "-");
+      nlohmann::json row = {{"width_px", o.width_px},
+                            {"height_px", o.height_px},
+                            {"gather_n", o.size_n},
+                            {"layers_full", pattern.layers()},
+                            {"precision", name},
+                            {"bytes_per_texel", bytes_per_texel(precision)},
+                            {"scale", scale},
+                            {"extent", {{"width", extent.width}, {"height", extent.height}, {"layers", extent.layers}}},
+                            {"paper_convention_bytes", paper_bytes},
+                            {"paper_convention_mib", paper_bytes / kMiB},
+                            {"texel_bytes", flag_texel_bytes(o.width_px, o.height_px, pattern, precision, scale)},
+                            {"allocated_bytes", allocated},
+                            {"allocated_mib", allocated / kMiB}};
+      if (printed > 0) row["paper_printed_mb"] = printed;
+      rows.push_back(row);
+    }
+  }
+  write_results(o.out_path, "bokehbench.memory", run_context(&ctx.info()),
+                {{"convention",
+                  "paper_convention_bytes = W*H*ceil(N/2)*bytes_per_texel/scale^3 (fractional layers, as the paper's "
+                  "42 and 5.2 MB); allocated_bytes = vkGetImageMemoryRequirements of the whole-texel 3D image"},
+                 {"buffers", rows}});
+  fmt::print("wrote {}\n", o.out_path);
+}
+
+}  // namespace
+
+void add_memory_command(CLI::App& app) {
+  auto o = std::make_shared<MemoryOptions>();
+  auto* cmd = app.add_subcommand("memory", "FLAG 3D-buffer size: paper convention and actual allocation");
+  cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(1, 16384));
+  cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
+  cmd->add_option("--precision", o->precisions, "Layer precisions")->check(CLI::IsMember({"f32", "f16"}));
+  cmd->add_option("--scale", o->scales, "Buffer scales: 1 full, 2 half, 4 quarter")->check(CLI::IsMember({1, 2, 4}));
+  cmd->add_option("--device", o->device, "Vulkan device index or name part");
+  cmd->add_option("--out", o->out_path, "JSON output path");
+  cmd->callback([o] { memory(*o); });
+}
+
+}  // namespace bokeh

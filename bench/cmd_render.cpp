@@ -1,0 +1,88 @@
+// `bokehbench render`: one image through one method, so a user can look at what is being timed.
+#include <chrono>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "coc.hpp"
+#include "commands.hpp"
+#include "image_io.hpp"
+#include "parallel.hpp"
+#include "pipeline.hpp"
+#include "scene.hpp"
+
+namespace bokeh {
+
+namespace {
+
+struct RenderOptions {
+  std::string scene_name = "hoops";
+  std::string color_path, depth_path, lens_path, method = "flag", precision, backend = "gpu", device;
+  std::string out_path = "render.png";
+  int width_px = 800, height_px = 600, size_n = 41, spacing_px = 2;
+  std::optional<double> fit_max_coc_px;
+};
+
+void render(const RenderOptions& o) {
+  Scene scene = o.color_path.empty() ? make_scene(o.scene_name, o.width_px, o.height_px)
+                                     : load_scene(o.color_path, o.depth_path);
+  if (!o.lens_path.empty()) scene.lens = load_lens_json(o.lens_path);
+  const FilterRegistration& filter = find_filter(o.method);
+  const gpu::FilterOptions options{{o.size_n, o.spacing_px}, o.precision.empty() ? filter.precisions.front() : o.precision};
+  validate(options.pattern);
+  if (o.fit_max_coc_px) scene.lens = with_max_coc_radius(scene.lens, scene.depth_m, *o.fit_max_coc_px);
+
+  fmt::print("{} {}x{}, {} ({}) on {}, N={} k={} (max radius {} px), f/{:.3g} focus {} m\n", scene.name,
+             scene.color.width, scene.color.height, o.method, options.precision, o.backend, o.size_n, o.spacing_px,
+             options.pattern.max_radius_px(),
+             scene.lens.f_stop, scene.lens.focus_distance_m);
+  Image result;
+  if (o.backend == "gpu") {
+    vk::Context ctx(o.device);
+    std::vector<vk::PassTime> passes;
+    result = run_gpu(ctx, filter, scene.color, scene.depth_m, scene.lens, options, &passes);
+    fmt::print("device: {} ({})\n", ctx.info().name, ctx.info().driver_info);
+    for (const auto& p : passes) fmt::print("  {:<12} {:9.3f} ms\n", p.pass, p.ms);
+    fmt::print("  {:<12} {:9.3f} ms (one frame after warm-up)\n", "frame", vk::frame_ms(passes));
+  } else if (o.backend == "cpu") {
+    const auto start = std::chrono::steady_clock::now();
+    result = run_cpu(filter, scene.color, scene.depth_m, scene.lens, options, default_cpu_threads());
+    fmt::print("  cpu frame {:9.3f} ms\n",
+               std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  } else {
+    throw std::invalid_argument("--backend must be gpu or cpu");
+  }
+  write_image(result, o.out_path);
+  fmt::print("wrote {}\n", o.out_path);
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app) {
+  auto o = std::make_shared<RenderOptions>();
+  auto* cmd = app.add_subcommand("render", "Render one image with one method");
+  auto* scene = cmd->add_option("--scene", o->scene_name, "Procedural scene: hoops, pillars, points")
+                    ->check(CLI::IsMember({"hoops", "pillars", "points"}));
+  auto* color = cmd->add_option("--color", o->color_path, "Colour image (linear RGB, e.g. EXR)")->check(CLI::ExistingFile);
+  auto* depth = cmd->add_option("--depth", o->depth_path, "Depth image: planar view-space depth in metres, channel 0")
+                    ->check(CLI::ExistingFile);
+  color->needs(depth);
+  depth->needs(color);
+  scene->excludes(color);
+  cmd->add_option("--width", o->width_px, "Procedural scene width in px")->check(CLI::Range(16, 16384));
+  cmd->add_option("--height", o->height_px, "Procedural scene height in px")->check(CLI::Range(16, 16384));
+  cmd->add_option("--lens", o->lens_path,
+                  "Lens JSON: focal_length_mm, f_stop, sensor_width_mm, focus_distance_m [, coc_model]")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--fit-max-coc", o->fit_max_coc_px, "Set the f-stop so the scene's largest CoC radius is this many px");
+  cmd->add_option("--method", o->method, "Filter method (naive, flag, ...)");
+  cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
+  cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px");
+  cmd->add_option("--precision", o->precision, "Intermediate storage, e.g. FLAG layers f16 or f32 (default: the method's)");
+  cmd->add_option("--backend", o->backend, "gpu (Vulkan) or cpu (reference)")->check(CLI::IsMember({"gpu", "cpu"}));
+  cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
+  cmd->add_option("--out", o->out_path, "Output image: .exr (linear) or .png (tone-mapped)");
+  cmd->callback([o] { render(*o); });
+}
+
+}  // namespace bokeh

@@ -1,0 +1,25 @@
+// bokehbench: benchmarks and checks bokeh depth-of-field filters (see README.md).
+#include <csignal>
+#include <exception>
+
+#include <fmt/format.h>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"bokehbench: cost, memory and accuracy of bokeh depth-of-field filters"};
+  app.require_subcommand(1);
+  bokeh::add_figure9_command(app);
+  bokeh::add_memory_command(app);
+  bokeh::add_render_command(app);
+  bokeh::add_devices_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "bokehbench: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,26 @@
+#pragma once
+// The one JSON writer: every results file is {schema, schema_version, context, ...} and is written
+// atomically (temp file + rename), so an interrupted run never leaves a half-written file.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "vk/context.hpp"
+
+namespace bokeh {
+
+// Bumped when a key changes meaning or disappears; adding keys keeps the version.
+constexpr int kSchemaVersion = 1;
+
+// Device, driver, machine and build: what a reader needs to trust or compare a number.
+nlohmann::json run_context(const vk::DeviceInfo* device);
+nlohmann::json device_json(const vk::DeviceInfo& device);
+
+// Wraps `body` as {"schema": name, "schema_version", "context", ...body} and writes it atomically.
+void write_results(const std::string& path, const std::string& schema_name, const nlohmann::json& context,
+                   const nlohmann::json& body);
+
+// Creates the parent directory of `path` if needed.
+void ensure_parent_dir(const std::string& path);
+
+}  // namespace bokeh

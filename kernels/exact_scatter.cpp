@@ -1,0 +1,334 @@
+#include "exact_scatter.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+#include <unordered_map>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "image_io.hpp"
+
+namespace bokeh {
+
+namespace {
+
+// Bump when the reference changes, so stale cache files are never read back.
+constexpr std::string_view kAlgorithmVersion = "exact_scatter v1: analytic coverage, additive-saturating layers";
+
+// ---- Disc / unit-square intersection, exact in closed form -------------------------------------------
+// Disc of radius r centred at the origin. All offsets are from the source pixel's centre, so target
+// pixel (dx, dy) is the square [dx-0.5, dx+0.5] x [dy-0.5, dy+0.5].
+
+// Integral of sqrt(r^2 - s^2) for s in [0, x], x in [0, r].
+double half_chord_integral(double r, double x) {
+  return 0.5 * (x * std::sqrt(std::max(r * r - x * x, 0.0)) + r * r * std::asin(std::min(x / r, 1.0)));
+}
+
+// A horizontal line y = const (0 <= y) and where it leaves the disc: what every area on that line needs.
+struct HorizontalEdge {
+  double y;        // clamped to r
+  double x_cross;  // sqrt(r^2 - y^2): the disc's half width at y
+  double integral_at_cross;
+  HorizontalEdge(double r, double y_abs) : y(std::min(y_abs, r)) {
+    x_cross = std::sqrt(std::max(r * r - y * y, 0.0));
+    integral_at_cross = half_chord_integral(r, x_cross);
+  }
+};
+
+// Area of the disc inside [0, x] x [0, edge.y] for x >= 0; integral_at_x = half_chord_integral(r, min(x, r)).
+double quadrant_area(double x, const HorizontalEdge& edge, double integral_at_x) {
+  if (x <= edge.x_cross) return x * edge.y;  // the rectangle's far corner lies inside the disc
+  return edge.y * edge.x_cross + integral_at_x - edge.integral_at_cross;
+}
+
+// Everything the scatter needs about one radius, for the quadrant |dx|, |dy| >= 0 (the disc is symmetric).
+struct DiscStencil {
+  int reach = 0;                  // largest |dx| or |dy| whose square overlaps the disc
+  std::vector<int> inner;         // per |dy|: largest |dx| whose square lies wholly inside (coverage 1), or -1
+  std::vector<int> edge_begin;    // per |dy| (+1 sentinel): where that row's partial coverages start
+  std::vector<double> edge_coverage;  // per |dy|: coverage of |dx| = inner+1, inner+2, ... (all overlapping)
+  double area = 1.0;              // sum of coverage over all pixels of the plane, both signs of dx and dy
+};
+
+int reach_of(float radius_px) {
+  // A square at offset d overlaps the disc iff d - 0.5 < r. r <= 0.5: the disc stays in its own pixel.
+  return radius_px <= 0.5f ? 0 : static_cast<int>(std::ceil(static_cast<double>(radius_px) + 0.5)) - 1;
+}
+
+DiscStencil make_disc_stencil(float radius_px) {
+  DiscStencil st;
+  st.reach = reach_of(radius_px);
+  st.edge_begin.push_back(0);
+  if (radius_px <= 0.5f) {  // the identity, by definition rather than by a pi r^2 / pi r^2 rounding
+    st.inner.push_back(0);
+    st.edge_begin.push_back(0);
+    return st;
+  }
+  const double r = radius_px, r2 = r * r;  // exact: r has a 24 bit mantissa
+  double area = 0.0;
+  for (int dy = 0; dy <= st.reach; ++dy) {
+    // Interior: the far corner (|dx|+0.5, |dy|+0.5) inside, tested exactly (halves and small integers).
+    const double y_far = dy + 0.5;
+    int inner = -1;
+    if (y_far * y_far + 0.25 <= r2) {
+      inner = static_cast<int>(std::floor(std::sqrt(r2 - y_far * y_far) - 0.5));
+      while (inner >= 0 && (inner + 0.5) * (inner + 0.5) + y_far * y_far > r2) --inner;
+      while ((inner + 1.5) * (inner + 1.5) + y_far * y_far <= r2) ++inner;
+    }
+    const double y_near = std::max(dy - 0.5, 0.0);
+    const int outer = std::max(inner, static_cast<int>(std::ceil(std::sqrt(r2 - y_near * y_near) + 0.5)) - 1);
+
+    // Area of the disc in the strip [0, x] x [dy-0.5, dy+0.5]; for dy = 0 the strip straddles y = 0.
+    const HorizontalEdge top(r, dy + 0.5), bottom(r, std::abs(dy - 0.5));
+    const double bottom_sign = dy == 0 ? -1.0 : 1.0;
+    auto strip_area = [&](double x) {
+      const double integral = half_chord_integral(r, std::min(x, r));
+      return quadrant_area(x, top, integral) - bottom_sign * quadrant_area(x, bottom, integral);
+    };
+    // Coverage of |dx| = strip_area(dx + 0.5) - strip_area(dx - 0.5); the strip is odd in x.
+    double left = inner >= 0 ? strip_area(inner + 0.5) : -strip_area(0.5);
+    double row_area = inner >= 0 ? 2.0 * inner + 1.0 : 0.0;  // 1 per interior square
+    for (int dx = inner + 1; dx <= outer; ++dx) {
+      const double right = strip_area(dx + 0.5);
+      const double coverage = right - left;
+      st.edge_coverage.push_back(coverage);
+      row_area += dx == 0 ? coverage : 2.0 * coverage;
+      left = right;
+    }
+    st.inner.push_back(inner);
+    st.edge_begin.push_back(static_cast<int>(st.edge_coverage.size()));
+    area += dy == 0 ? row_area : 2.0 * row_area;
+  }
+  st.area = area;
+  return st;
+}
+
+// Stencils by radius for one band of work: scenes repeat radii (one per surface depth), so most
+// lookups hit; the map is emptied when it grows, which bounds memory for smoothly varying depth.
+class StencilCache {
+ public:
+  const DiscStencil& get(float radius_px) {
+    const auto key = std::bit_cast<std::uint32_t>(radius_px);
+    if (auto it = stencils_.find(key); it != stencils_.end()) return it->second;
+    if (stencils_.size() >= kCapacity) stencils_.clear();
+    return stencils_.emplace(key, make_disc_stencil(radius_px)).first->second;
+  }
+
+ private:
+  static constexpr std::size_t kCapacity = 256;
+  std::unordered_map<std::uint32_t, DiscStencil> stencils_;
+};
+
+// Calls add(tx, coverage) for every target pixel of row sy +- dy_abs that the disc of a source at sx overlaps.
+template <class Add>
+void for_each_target_in_row(const DiscStencil& st, int dy_abs, int sx, int width, Add&& add) {
+  const int inner = st.inner[dy_abs];
+  for (int tx = std::max(sx - inner, 0), end = std::min(sx + inner, width - 1); tx <= end; ++tx) add(tx, 1.0);
+  const int begin = st.edge_begin[dy_abs], count = st.edge_begin[dy_abs + 1] - begin;
+  for (int i = 0; i < count; ++i) {
+    const int dx = inner + 1 + i;
+    const double coverage = st.edge_coverage[begin + i];
+    if (sx + dx < width) add(sx + dx, coverage);
+    if (dx != 0 && sx - dx >= 0) add(sx - dx, coverage);
+  }
+}
+
+void validate_inputs(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode) {
+  if (color.channels < 3) throw std::invalid_argument("exact_scatter: colour needs at least three channels");
+  if (radius_px.channels != 1 || radius_px.width != color.width || radius_px.height != color.height)
+    throw std::invalid_argument(fmt::format("exact_scatter: radius must be 1 channel of {}x{}, got {} of {}x{}",
+                                            color.width, color.height, radius_px.channels, radius_px.width,
+                                            radius_px.height));
+  for (std::size_t i = 0; i < radius_px.pixels.size(); ++i)
+    if (!std::isfinite(radius_px.pixels[i]) || radius_px.pixels[i] < 0.0f)
+      throw std::invalid_argument(fmt::format("exact_scatter: radius at pixel ({}, {}) is {}: must be finite, >= 0",
+                                              i % color.width, i / color.width, radius_px.pixels[i]));
+  if (mode != ScatterComposite::depth_ordered) return;
+  if (depth_m.channels != 1 || depth_m.width != color.width || depth_m.height != color.height)
+    throw std::invalid_argument(fmt::format("exact_scatter: depth must be 1 channel of {}x{}, got {} of {}x{}",
+                                            color.width, color.height, depth_m.channels, depth_m.width,
+                                            depth_m.height));
+  for (std::size_t i = 0; i < depth_m.pixels.size(); ++i)
+    if (!std::isfinite(depth_m.pixels[i]))
+      throw std::invalid_argument(fmt::format("exact_scatter: depth at pixel ({}, {}) is {}: must be finite",
+                                              i % color.width, i / color.width, depth_m.pixels[i]));
+}
+
+// Work is split into bands of target rows, each owned by one thread: a gather formulation of the
+// scatter, so no two threads write the same pixel. Several bands per thread even out uneven cost.
+struct Bands {
+  int height_px, count;
+  Bands(int image_height, int threads)
+      : height_px(std::max(1, (image_height + 4 * threads - 1) / (4 * threads))),
+        count((image_height + height_px - 1) / height_px) {}
+};
+
+// Both modes write out[(y * width + x) * 3 + k], which the caller sized; each band writes only its rows.
+void scatter_energy_sum(const Image& color, const Image& radius_px, int threads, std::vector<double>& out) {
+  const int w = color.width, h = color.height;
+  const float max_radius = *std::max_element(radius_px.pixels.begin(), radius_px.pixels.end());
+  const int max_reach = reach_of(max_radius);
+  const Bands bands(h, threads);
+  parallel_rows(bands.count, threads, [&](int band) {
+    const int y0 = band * bands.height_px, y1 = std::min(h, y0 + bands.height_px);
+    double* sum = out.data() + static_cast<std::size_t>(y0) * w * 3;
+    StencilCache stencils;
+    for (int sy = std::max(0, y0 - max_reach); sy < std::min(h, y1 + max_reach); ++sy)
+      for (int sx = 0; sx < w; ++sx) {
+        const float r = *radius_px.px(sx, sy);
+        const int reach = reach_of(r);
+        if (sy + reach < y0 || sy - reach >= y1) continue;
+        const float* c = color.px(sx, sy);
+        if (c[0] == 0.0f && c[1] == 0.0f && c[2] == 0.0f) continue;  // adds nothing
+        const DiscStencil& st = stencils.get(r);
+        const double scale[3] = {c[0] / st.area, c[1] / st.area, c[2] / st.area};
+        for (int ty = std::max(y0, sy - reach); ty < std::min(y1, sy + reach + 1); ++ty) {
+          double* row = sum + static_cast<std::size_t>(ty - y0) * w * 3;
+          for_each_target_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
+            double* t = row + 3 * tx;
+            for (int k = 0; k < 3; ++k) t[k] += coverage * scale[k];
+          });
+        }
+      }
+  });
+}
+
+void scatter_depth_ordered(const Image& color, const Image& radius_px, const Image& depth_m, int threads,
+                           std::vector<double>& out) {
+  const int w = color.width, h = color.height;
+  // Front to back; equal depths end up adjacent and form one layer.
+  std::vector<std::uint32_t> order(color.pixel_count());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return depth_m.pixels[a] < depth_m.pixels[b]; });
+  const Bands bands(h, threads);
+  parallel_rows(bands.count, threads, [&](int band) {
+    const int y0 = band * bands.height_px, y1 = std::min(h, y0 + bands.height_px);
+    const std::size_t band_px = static_cast<std::size_t>(y1 - y0) * w;
+    std::vector<double> rgb(band_px * 3, 0.0), alpha(band_px, 0.0);
+    std::vector<double> layer_rgb(band_px * 3, 0.0), layer_weight(band_px, 0.0);
+    std::vector<std::size_t> touched;  // band pixels the current layer reached
+    StencilCache stencils;
+    for (std::size_t first = 0; first < order.size();) {
+      const float layer_depth = depth_m.pixels[order[first]];
+      std::size_t end = first;
+      for (; end < order.size() && depth_m.pixels[order[end]] == layer_depth; ++end) {
+        const int sx = static_cast<int>(order[end] % w), sy = static_cast<int>(order[end] / w);
+        const float r = *radius_px.px(sx, sy);
+        const int reach = reach_of(r);
+        if (sy + reach < y0 || sy - reach >= y1) continue;
+        const DiscStencil& st = stencils.get(r);
+        const float* c = color.px(sx, sy);
+        for (int ty = std::max(y0, sy - reach); ty < std::min(y1, sy + reach + 1); ++ty) {
+          const std::size_t row = static_cast<std::size_t>(ty - y0) * w;
+          for_each_target_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
+            const std::size_t t = row + tx;
+            if (alpha[t] >= 1.0 || coverage <= 0.0) return;  // view already full, or a rounding-zero sliver
+            if (layer_weight[t] == 0.0) touched.push_back(t);
+            const double weight = coverage / st.area;
+            layer_weight[t] += weight;
+            for (int k = 0; k < 3; ++k) layer_rgb[3 * t + k] += weight * c[k];
+          });
+        }
+      }
+      for (std::size_t t : touched) {
+        const double f = std::min(1.0, (1.0 - alpha[t]) / layer_weight[t]);
+        for (int k = 0; k < 3; ++k) rgb[3 * t + k] += f * layer_rgb[3 * t + k], layer_rgb[3 * t + k] = 0.0;
+        alpha[t] += f * layer_weight[t];
+        layer_weight[t] = 0.0;
+      }
+      touched.clear();
+      first = end;
+    }
+    double* band_out = out.data() + static_cast<std::size_t>(y0) * w * 3;
+    for (std::size_t t = 0; t < band_px; ++t)
+      for (int k = 0; k < 3; ++k) band_out[3 * t + k] = alpha[t] > 0.0 ? rgb[3 * t + k] / alpha[t] : 0.0;
+  });
+}
+
+void fnv1a(std::uint64_t& hash, const void* data, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+}
+
+void fnv1a_image(std::uint64_t& hash, const Image& image) {
+  const int shape[3] = {image.width, image.height, image.channels};
+  fnv1a(hash, shape, sizeof shape);
+  fnv1a(hash, image.pixels.data(), image.pixels.size() * sizeof(float));
+}
+
+}  // namespace
+
+std::string to_string(ScatterComposite mode) {
+  return mode == ScatterComposite::energy_sum ? "energy_sum" : "depth_ordered";
+}
+
+std::vector<double> exact_scatter_double(const Image& color, const Image& radius_px, const Image& depth_m,
+                                         ScatterComposite mode, int threads) {
+  validate_inputs(color, radius_px, depth_m, mode);
+  std::vector<double> out(color.pixel_count() * 3, 0.0);
+  if (out.empty()) return out;
+  if (mode == ScatterComposite::energy_sum)
+    scatter_energy_sum(color, radius_px, threads, out);
+  else
+    scatter_depth_ordered(color, radius_px, depth_m, threads, out);
+  return out;
+}
+
+Image exact_scatter(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
+                    int threads) {
+  const std::vector<double> rgb = exact_scatter_double(color, radius_px, depth_m, mode, threads);
+  Image out(color.width, color.height, 3);
+  std::transform(rgb.begin(), rgb.end(), out.pixels.begin(), [](double v) { return static_cast<float>(v); });
+  return out;
+}
+
+std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, const Image& depth_m,
+                                ScatterComposite mode) {
+  std::uint64_t hash = 14695981039346656037ull;
+  fnv1a(hash, kAlgorithmVersion.data(), kAlgorithmVersion.size());
+  const int mode_id = static_cast<int>(mode);
+  fnv1a(hash, &mode_id, sizeof mode_id);
+  fnv1a_image(hash, color);
+  fnv1a_image(hash, radius_px);
+  if (mode == ScatterComposite::depth_ordered) fnv1a_image(hash, depth_m);
+  return hash;
+}
+
+ExactReferenceCache::ExactReferenceCache(std::filesystem::path directory) : directory_(std::move(directory)) {}
+
+std::filesystem::path ExactReferenceCache::path_for(const Image& color, const Image& radius_px, const Image& depth_m,
+                                                    ScatterComposite mode) const {
+  return directory_ / fmt::format("exact-{}-{}x{}-{:016x}.exr", to_string(mode), color.width, color.height,
+                                  exact_scatter_key(color, radius_px, depth_m, mode));
+}
+
+Image ExactReferenceCache::get(const Image& color, const Image& radius_px, const Image& depth_m,
+                               ScatterComposite mode, int threads) {
+  validate_inputs(color, radius_px, depth_m, mode);
+  const std::filesystem::path path = path_for(color, radius_px, depth_m, mode);
+  if (std::filesystem::exists(path)) {
+    try {
+      Image cached = read_image(path.string(), 3);
+      if (cached.width == color.width && cached.height == color.height) return cached;
+    } catch (const std::runtime_error&) {
+      // Unreadable (e.g. truncated by a crash): recompute and overwrite below.
+    }
+  }
+  Image reference = exact_scatter(color, radius_px, depth_m, mode, threads);
+  std::filesystem::create_directories(directory_);
+  // Unique temporary name, still ending in .exr so write_image picks the format.
+  const std::filesystem::path partial =
+      path.parent_path() / fmt::format("{}.partial-{:08x}.exr", path.stem().string(), std::random_device{}());
+  write_image(reference, partial.string());
+  std::filesystem::rename(partial, path);
+  return reference;
+}
+
+}  // namespace bokeh
