@@ -15,10 +15,6 @@
 #include "stats.hpp"
 #include "sweep.hpp"
 
-#ifndef BOKEH_SOURCE_DIR
-#define BOKEH_SOURCE_DIR "."
-#endif
-
 namespace bokeh {
 
 namespace {
@@ -94,7 +90,7 @@ void figure9(Figure9Options o) {
   const std::size_t total = o.methods.size() * o.backends.size() * o.sizes.size();
   RepetitionPolicy policy;
   policy.point_budget_s = o.budget_s / static_cast<double>(total);
-  Sweep sweep(o.out_dir + "/figure9_gbench.json", policy);
+  auto sweep = std::make_unique<Sweep>(o.out_dir + "/figure9_gbench.json", policy);
 
   fmt::print("Figure 9: {} {}x{}, k={}, sizes {}, device {}, LP_NUM_THREADS={}\n", o.scene, o.width_px, o.height_px,
              o.spacing_px, fmt::join(o.sizes, ","), ctx ? ctx->info().name : "none",
@@ -142,24 +138,8 @@ void figure9(Figure9Options o) {
         const std::string name = fmt::format("figure9/{}/{}/N:{}/k:{}", method, backend, n, o.spacing_px);
         try {
           const Lens lens = with_max_coc_radius(scene.lens, scene.depth_m, options.pattern.max_radius_px());
-          PointStats stats;
-          if (backend == "gpu") {
-            gpu::GpuFrame frame(*ctx, scene.color, scene.depth_m, lens, options.pattern);
-            auto gpu_filter = filter.make_gpu(frame, options);
-            vk::TimestampQueries timer(*ctx, 16);
-            stats = sweep.measure(name, [&] { gpu::warm_up(frame, *gpu_filter, timer); },
-                                  [&] { return gpu::run_frame(frame, *gpu_filter, timer); }, true);
-          } else if (backend == "cpu") {
-            stats = sweep.measure(name, [] {},
-                                  [&] {
-                                    benchmark::DoNotOptimize(
-                                        run_cpu(filter, scene.color, scene.depth_m, lens, options, o.cpu_threads));
-                                    return std::vector<vk::PassTime>{};
-                                  },
-                                  false);
-          } else {
-            throw std::invalid_argument("backend must be gpu or cpu");
-          }
+          const PointStats stats = measure_method(*sweep, name, ctx ? &*ctx : nullptr, filter, backend, scene, lens,
+                                                  options, o.cpu_threads);
           series_list.back()["points"].push_back(
               {{"N", n},
                {"k", o.spacing_px},
@@ -184,18 +164,13 @@ void figure9(Figure9Options o) {
     }
   }
   const bool complete = !Sweep::interrupted();
+  sweep.reset();  // closes figure9_gbench.json
   write(complete);
   fmt::print("wrote {}/figure9.json and {}/figure9_gbench.json ({:.0f} s)\n", o.out_dir, o.out_dir,
              std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count());
   if (!complete) throw std::runtime_error("interrupted: finished points are in " + o.out_dir + "/figure9.json");
 
-  if (o.plot) {
-    const std::string cmd = fmt::format("/usr/bin/python3 '{}/plots/plot_figure9.py' '{}/figure9.json' '{}/figure9'",
-                                        BOKEH_SOURCE_DIR, o.out_dir, o.plots_dir);
-    std::fflush(stdout);
-    if (std::system(cmd.c_str()) != 0)
-      throw std::runtime_error("plotting failed (is python3-matplotlib installed?): " + cmd);
-  }
+  if (o.plot) run_plot_script("plot_figure9.py", o.out_dir + "/figure9.json", o.plots_dir + "/figure9");
 }
 
 }  // namespace

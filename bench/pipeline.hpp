@@ -4,6 +4,8 @@
 
 #include "filters.hpp"
 #include "lens.hpp"
+#include "scene.hpp"
+#include "sweep.hpp"
 #include "vk/context.hpp"
 
 namespace bokeh {
@@ -20,5 +22,11 @@ Image run_cpu(const FilterRegistration& filter, const Image& color, const Image&
 // One GPU frame (warmed up first). `pass_times` receives per-pass milliseconds if given.
 Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& color, const Image& depth_m,
               const Lens& lens, const gpu::FilterOptions& options, std::vector<vk::PassTime>* pass_times = nullptr);
+
+// Times one method on "gpu" (Vulkan timestamps; ctx required) or "cpu" (wall clock, CoC pass
+// included) through `sweep`, under the Google Benchmark name `name`.
+PointStats measure_method(Sweep& sweep, const std::string& name, vk::Context* ctx, const FilterRegistration& filter,
+                          const std::string& backend, const Scene& scene, const Lens& lens,
+                          const gpu::FilterOptions& options, int cpu_threads);
 
 }  // namespace bokeh

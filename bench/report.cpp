@@ -10,6 +10,9 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
+#ifndef BOKEH_SOURCE_DIR
+#define BOKEH_SOURCE_DIR "."
+#endif
 #ifndef BOKEH_GIT_COMMIT
 #define BOKEH_GIT_COMMIT "unknown"
 #endif
@@ -69,6 +72,15 @@ nlohmann::json run_context(const vk::DeviceInfo* device) {
 void ensure_parent_dir(const std::string& path) {
   const auto parent = std::filesystem::path(path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
+}
+
+void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix) {
+  ensure_parent_dir(out_prefix);
+  const std::string cmd = fmt::format("/usr/bin/python3 '{}/plots/{}' '{}' '{}'", BOKEH_SOURCE_DIR, script, json_path,
+                                      out_prefix);
+  std::fflush(stdout);
+  if (std::system(cmd.c_str()) != 0)
+    throw std::runtime_error("plotting failed (is python3-matplotlib installed?): " + cmd);
 }
 
 void write_results(const std::string& path, const std::string& schema_name, const nlohmann::json& context,

@@ -23,4 +23,8 @@ void write_results(const std::string& path, const std::string& schema_name, cons
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);
 
+// Runs plots/<script> with Debian's python3 (which has matplotlib): script JSON OUT_PREFIX.
+// Throws if it fails; the results file is already written by then.
+void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix);
+
 }  // namespace bokeh

@@ -65,9 +65,10 @@ Sweep::Sweep(const std::string& gbench_json_path, RepetitionPolicy policy) : pol
   reporter_ = std::make_unique<Reporter>(gbench_file_);
   static bool initialized = false;
   if (!initialized) {
+    // gbench keeps argv[0] as the executable name for its JSON context: it must outlive the run.
+    static char name[] = "bokehbench";
+    static char* argv[] = {name, nullptr};
     int argc = 1;
-    char name[] = "bokehbench";
-    char* argv[] = {name, nullptr};
     benchmark::Initialize(&argc, argv);
     initialized = true;
   }

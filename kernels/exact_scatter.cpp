@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <numbers>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -19,7 +18,8 @@ namespace bokeh {
 namespace {
 
 // Bump when the reference changes, so stale cache files are never read back.
-constexpr std::string_view kAlgorithmVersion = "exact_scatter v1: analytic coverage, additive-saturating layers";
+constexpr std::string_view kAlgorithmVersion =
+    "exact_scatter v1: analytic coverage; additive-saturating layers; own surface continued behind nearer pixels";
 
 // ---- Disc / unit-square intersection, exact in closed form -------------------------------------------
 // Disc of radius r centred at the origin. All offsets are from the source pixel's centre, so target
@@ -125,17 +125,19 @@ class StencilCache {
   std::unordered_map<std::uint32_t, DiscStencil> stencils_;
 };
 
-// Calls add(tx, coverage) for every target pixel of row sy +- dy_abs that the disc of a source at sx overlaps.
+// Calls add(x, coverage) for every in-image pixel of the row dy_abs above (or below) the disc's centre
+// pixel cx that the disc overlaps. The disc is symmetric, so this lists both the targets a source at cx
+// reaches and the sources (of this radius) that reach a target at cx.
 template <class Add>
-void for_each_target_in_row(const DiscStencil& st, int dy_abs, int sx, int width, Add&& add) {
+void for_each_overlapped_pixel_in_row(const DiscStencil& st, int dy_abs, int cx, int width, Add&& add) {
   const int inner = st.inner[dy_abs];
-  for (int tx = std::max(sx - inner, 0), end = std::min(sx + inner, width - 1); tx <= end; ++tx) add(tx, 1.0);
+  for (int x = std::max(cx - inner, 0), end = std::min(cx + inner, width - 1); x <= end; ++x) add(x, 1.0);
   const int begin = st.edge_begin[dy_abs], count = st.edge_begin[dy_abs + 1] - begin;
   for (int i = 0; i < count; ++i) {
     const int dx = inner + 1 + i;
     const double coverage = st.edge_coverage[begin + i];
-    if (sx + dx < width) add(sx + dx, coverage);
-    if (dx != 0 && sx - dx >= 0) add(sx - dx, coverage);
+    if (cx + dx < width) add(cx + dx, coverage);
+    if (dx != 0 && cx - dx >= 0) add(cx - dx, coverage);
   }
 }
 
@@ -190,7 +192,7 @@ void scatter_energy_sum(const Image& color, const Image& radius_px, int threads,
         const double scale[3] = {c[0] / st.area, c[1] / st.area, c[2] / st.area};
         for (int ty = std::max(y0, sy - reach); ty < std::min(y1, sy + reach + 1); ++ty) {
           double* row = sum + static_cast<std::size_t>(ty - y0) * w * 3;
-          for_each_target_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
+          for_each_overlapped_pixel_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
             double* t = row + 3 * tx;
             for (int k = 0; k < 3; ++k) t[k] += coverage * scale[k];
           });
@@ -201,6 +203,9 @@ void scatter_energy_sum(const Image& color, const Image& radius_px, int threads,
 
 void scatter_depth_ordered(const Image& color, const Image& radius_px, const Image& depth_m, int threads,
                            std::vector<double>& out) {
+  // Views this close to full count as full: spares the hidden-surface pass the rounding residue of
+  // interiors, whose shares sum to 1 only up to rounding.
+  constexpr double kFullView = 1.0 - 1e-9;
   const int w = color.width, h = color.height;
   // Front to back; equal depths end up adjacent and form one layer.
   std::vector<std::uint32_t> order(color.pixel_count());
@@ -227,7 +232,7 @@ void scatter_depth_ordered(const Image& color, const Image& radius_px, const Ima
         const float* c = color.px(sx, sy);
         for (int ty = std::max(y0, sy - reach); ty < std::min(y1, sy + reach + 1); ++ty) {
           const std::size_t row = static_cast<std::size_t>(ty - y0) * w;
-          for_each_target_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
+          for_each_overlapped_pixel_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
             const std::size_t t = row + tx;
             if (alpha[t] >= 1.0 || coverage <= 0.0) return;  // view already full, or a rounding-zero sliver
             if (layer_weight[t] == 0.0) touched.push_back(t);
@@ -246,9 +251,25 @@ void scatter_depth_ordered(const Image& color, const Image& radius_px, const Ima
       touched.clear();
       first = end;
     }
-    double* band_out = out.data() + static_cast<std::size_t>(y0) * w * 3;
-    for (std::size_t t = 0; t < band_px; ++t)
-      for (int k = 0; k < 3; ++k) band_out[3 * t + k] = alpha[t] > 0.0 ? rgb[3 * t + k] / alpha[t] : 0.0;
+    // The surface seen at t continues behind nearer pixels and beyond the border: the share its disc
+    // would have had there is filled, up to a full view, with the mean colour of what the view shows.
+    for (std::size_t t = 0; t < band_px; ++t) {
+      if (alpha[t] >= kFullView || alpha[t] <= 0.0) continue;
+      const int tx = static_cast<int>(t % w), ty = y0 + static_cast<int>(t / w);
+      const float own_depth = *depth_m.px(tx, ty);
+      const DiscStencil& st = stencils.get(*radius_px.px(tx, ty));
+      double in_image = 0.0, nearer = 0.0;
+      for (int py = std::max(0, ty - st.reach); py <= std::min(h - 1, ty + st.reach); ++py)
+        for_each_overlapped_pixel_in_row(st, std::abs(py - ty), tx, w, [&](int px, double coverage) {
+          in_image += coverage;
+          if (*depth_m.px(px, py) < own_depth) nearer += coverage;
+        });
+      const double hidden = (nearer + st.area - in_image) / st.area;
+      const double fill = std::clamp(hidden, 0.0, 1.0 - alpha[t]);
+      for (int k = 0; k < 3; ++k) rgb[3 * t + k] *= (alpha[t] + fill) / alpha[t];
+      alpha[t] += fill;
+    }
+    std::copy(rgb.begin(), rgb.end(), out.begin() + static_cast<std::ptrdiff_t>(y0) * w * 3);
   });
 }
 

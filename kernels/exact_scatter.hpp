@@ -17,9 +17,10 @@ std::string to_string(ScatterComposite mode);
 
 // Geometry shared by both modes. Source pixel s (integer coordinates) is the unit square
 // [sx, sx+1] x [sy, sy+1]; its disc has radius r = radius_px(s) and is centred on the pixel centre.
-//   coverage_s(t) = area of (disc of s) ∩ (unit square of target pixel t), computed analytically in
-//                   double precision (exact up to rounding, ~1e-13 absolute for r <= 100; squares lying
-//                   wholly inside the disc get exactly 1).
+//   coverage_s(t) = area of (disc of s) ∩ (unit square of target pixel t), in closed form (circular
+//                   segment integrals) in double precision: no approximation beyond rounding (the
+//                   coverages of a disc sum to pi r^2 within 1e-12 relative for r <= 100; the tests hold
+//                   them to that). Squares lying wholly inside the disc get exactly 1.
 //   area_s        = sum over all integer pixel positions t (inside the image or not) of coverage_s(t),
 //                   i.e. pi r^2 up to rounding; summing the same coverages we spread makes every source
 //                   conserve its energy to rounding.
@@ -29,15 +30,24 @@ std::string to_string(ScatterComposite mode);
 // energy_sum:    out(t) = sum_s w_s(t) colour(s). Contributions landing outside the image are lost.
 // depth_ordered: a source is a surface patch; w_s(t) is the fraction of target t's view through the
 //   aperture that the patch occupies. Sources are taken front to back (ascending depth_m); sources of
-//   exactly equal depth form one layer (order inside a layer does not matter). With a(t) the opacity
-//   accumulated so far, a layer L with W = sum_{s in L} w_s(t) and C = sum_{s in L} w_s(t) colour(s)
-//   adds f = min(1, (1 - a) / W) of itself:  rgb(t) += f C,  a(t) += f W.
-//   Patches of one surface occupy disjoint parts of the aperture, so their opacities add (a multiplicative
-//   "over" of the pieces would leave e^-1 of an opaque blurred surface transparent); once a target's
-//   view is full (a = 1) everything behind is hidden. Finally out(t) = rgb(t) / a(t): the parts of the
-//   view the single image cannot show (surfaces hidden in the pinhole image, or beyond its border) are
-//   filled by the visible ones in proportion. Radius 0 everywhere gives the identity: each target sees
-//   only its own pixel, with w = 1.
+//   exactly equal depth form one layer (order inside a layer does not matter). With a(t) the view filled
+//   so far, a layer L with W = sum_{s in L} w_s(t) and C = sum_{s in L} w_s(t) colour(s) adds
+//   f = min(1, (1 - a) / W) of itself:  rgb(t) += f C,  a(t) += f W.
+//   Patches of one surface occupy disjoint parts of the aperture, so their shares add (a multiplicative
+//   "over" of the pieces would leave e^-1 of an opaque blurred surface transparent); once a view is
+//   full (a = 1) everything behind is hidden.
+//   Hidden surfaces: the surface seen at t in the pinhole image (t's own pixel: depth d_t, radius r_t)
+//   is taken to continue behind every nearer pixel and beyond the image border. Its disc centred on t
+//   would have had the share
+//     H = (sum of coverage over image pixels p with depth_m(p) < d_t + coverage falling off-image) / area
+//   there; that share, up to a full view, is filled with the mean colour of the view so far:
+//     out(t) = rgb(t) * (a + h) / a,  h = min(H, 1 - a).
+//   So a blurred background keeps its brightness beside a sharp foreground and at the border. The rest
+//   of the view stays dark rather than being invented: e.g. the in-focus backdrop hidden behind a
+//   blurred point light's own pixel (dividing by a everywhere would put the light's full colour on that
+//   pixel), or a hidden background behind a blurred foreground edge. Views within 1e-9 of full count as
+//   full.
+//   Radius 0 everywhere gives the identity: each target sees only its own pixel, with w = 1.
 //
 // color: >= 3 channels, linear RGB (channels beyond three are ignored). radius_px: 1 channel, finite
 // and >= 0. depth_m: 1 channel, finite; read only by depth_ordered (may be an empty Image otherwise).

@@ -186,14 +186,14 @@ TEST(ExactScatterDepthOrdered, BlurredForegroundIsCompositedOverTheBackdrop) {
       for (int x = 0; x < P::kSize; ++x) {
         const std::size_t i = (static_cast<std::size_t>(y) * P::kSize + x) * 3;
         const double w = share[i];
-        // Near first: c w over the backdrop pixel, which fills the rest (1 - w) of the view. The centre's
-        // backdrop is the source itself, so its view holds only the source: c.
-        const double expected = x == P::kC && y == P::kC ? P::kColor[k] : P::kColor[k] * w + P::kB[k] * (1.0 - w);
+        // Near first: c w over the backdrop pixel, which fills the rest (1 - w) of the view. The backdrop
+        // behind the source's own pixel is hidden and in focus (reaches nothing): that view stays dark.
+        const double expected = x == P::kC && y == P::kC ? P::kColor[k] * w : P::kColor[k] * w + P::kB[k] * (1.0 - w);
         ASSERT_NEAR(out[i + k], expected, 1e-12) << x << "," << y << " channel " << k;
         total += out[i + k];
       }
-    // By hand: (N - 1) b + (c - b)(1 - 1 / (9 pi)) + c.
-    const double hand = (P::kSize * P::kSize - 1) * P::kB[k] + (P::kColor[k] - P::kB[k]) * (1.0 - w_centre) + P::kColor[k];
+    // By hand: all of c, and the backdrop's (N - 1) b less the share 1 - 1 / (9 pi) the source hides.
+    const double hand = (P::kSize * P::kSize - 1) * P::kB[k] + P::kColor[k] - P::kB[k] * (1.0 - w_centre);
     EXPECT_NEAR(total, hand, 1e-10) << "channel " << k;
   }
   // energy_sum instead adds the spread colour on top of the backdrop: (N - 1) b + c.
@@ -206,7 +206,7 @@ TEST(ExactScatterDepthOrdered, OpaqueBlurredSurfaceHidesWhatIsBehind) {
   // Left half: a near surface of colour c blurred with radius 3. Right half: a far in-focus surface b.
   constexpr int kW = 32, kH = 16, kSplit = 16;
   const float c[3] = {2.0f, 1.0f, 0.5f}, b[3] = {0.1f, 0.6f, 0.3f};
-  Image color(kW, kH, 3), radius(kW, kH, 1), depth(kW, kH, 1), near_mask(kW, kH, 3);
+  Image color(kW, kH, 3), radius(kW, kH, 1), depth(kW, kH, 1), near_mask(kW, kH, 3), ones(kW, kH, 3, 1.0f);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       const bool near = x < kSplit;
@@ -216,15 +216,19 @@ TEST(ExactScatterDepthOrdered, OpaqueBlurredSurfaceHidesWhatIsBehind) {
       near_mask.px(x, y)[0] = near ? 1.0f : 0.0f;
     }
   const std::vector<double> out = exact_scatter_double(color, radius, depth, ScatterComposite::depth_ordered, 2);
-  // F(t): how much of target t's view the near surface fills = its summed shares.
+  // F(t): how much of target t's view the near surface fills = its summed shares. in_image(t): the share
+  // of a radius-3 disc around t inside the image (the rest, off-image, the near surface continues into).
   const std::vector<double> fill = exact_scatter_double(near_mask, radius, Image(), ScatterComposite::energy_sum, 2);
+  const std::vector<double> in_image =
+      exact_scatter_double(ones, Image(kW, kH, 1, 3.0f), Image(), ScatterComposite::energy_sum, 2);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       const std::size_t i = (static_cast<std::size_t>(y) * kW + x) * 3;
       for (int k = 0; k < 3; ++k) {
-        // Left: only the near surface is seen (renormalised where the view is partly off-image or open): c.
-        // Right: near surface first, the in-focus far pixel fills the rest.
-        const double expected = x < kSplit ? c[k] : c[k] * fill[i] + b[k] * (1.0 - fill[i]);
+        // Left: only the near surface, extended past the border; what lies behind its edge is hidden and
+        // in focus, so that part of the view stays dark. Right: near surface first, the far pixel fills the rest.
+        const double expected =
+            x < kSplit ? c[k] * (fill[i] + 1.0 - in_image[i]) : c[k] * fill[i] + b[k] * (1.0 - fill[i]);
         ASSERT_NEAR(out[i + k], expected, 1e-12) << x << "," << y;
       }
       if (x >= kSplit + 3) {
@@ -234,6 +238,29 @@ TEST(ExactScatterDepthOrdered, OpaqueBlurredSurfaceHidesWhatIsBehind) {
   // Inside the near surface, away from the borders, the shares of one surface add up to a full view:
   // nothing behind leaks through (a multiplicative "over" of the pieces would let e^-1 through).
   EXPECT_NEAR(fill[(8 * kW + 8) * 3], 1.0, 1e-12);
+}
+
+TEST(ExactScatterDepthOrdered, BlurredBackgroundContinuesBehindNearerPixelsAndBeyondTheBorder) {
+  // Left: a near in-focus surface c. Right: a far surface b blurred with radius 3. The far surface's
+  // discs are cut where the near surface and the border hide them; continuing it there restores a full
+  // view, so the output is the input: no dark halo around the near surface, no darkened border.
+  constexpr int kW = 24, kH = 12, kSplit = 10;
+  Image color(kW, kH, 3), radius(kW, kH, 1), depth(kW, kH, 1);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const bool near = x < kSplit;
+      const float rgb[3] = {near ? 1.5f : 0.25f, near ? 0.5f : 0.75f, 0.125f};
+      std::copy(rgb, rgb + 3, color.px(x, y));
+      *radius.px(x, y) = near ? 0.0f : 3.0f;
+      *depth.px(x, y) = near ? 2.0f : 30.0f;
+    }
+  const std::vector<double> out = exact_scatter_double(color, radius, depth, ScatterComposite::depth_ordered, 2);
+  for (std::size_t i = 0; i < out.size(); ++i) ASSERT_NEAR(out[i], color.pixels[i], 1e-12) << "value " << i;
+  // A single blurred surface filling the frame is its own colour everywhere, borders included.
+  const Image flat(kW, kH, 3, 0.75f);
+  const std::vector<double> flat_out =
+      exact_scatter_double(flat, Image(kW, kH, 1, 4.5f), Image(kW, kH, 1, 9.0f), ScatterComposite::depth_ordered, 2);
+  for (double v : flat_out) ASSERT_NEAR(v, 0.75, 1e-12);
 }
 
 TEST(ExactScatter, RejectsBadInputs) {
@@ -280,7 +307,7 @@ TEST(ExactScatter, DISABLED_Timing800x600HoopsRadius40) {
   const Lens lens = with_max_coc_radius(scene.lens, scene.depth_m, 40.0);
   const Image radius = coc_radius_image(scene.depth_m, lens, 40.0f);
   for (ScatterComposite mode : {ScatterComposite::energy_sum, ScatterComposite::depth_ordered})
-    for (int threads : {2, default_cpu_threads()}) {
+    for (int threads : {1, 2}) {
       const auto start = std::chrono::steady_clock::now();
       const Image out = exact_scatter(scene.color, radius, scene.depth_m, mode, threads);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

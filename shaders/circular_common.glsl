@@ -1,0 +1,76 @@
+// Shared by circular_horizontal.comp and circular_vertical.comp: the circular separable filter
+// (Garcia, GDC 2018) of kernels/circular_separable.cpp on the GPU, see bench/gpu/circular_gpu.cpp.
+// Included after common.glsl. PRECISION (a define, one SPIR-V per value) picks the intermediates:
+//   0 f32:         vec4 pair per pixel: [2 p] = Re of RGBA, [2 p + 1] = Im of RGBA          32 B
+//   1 f16:         uvec4 per pixel: packHalf2x16 of (Re.rg, Re.ba, Im.rg, Im.ba)            16 B
+//   2 bracketed10: 3 uints per pixel, three 10-bit unorm codes each as A2B10G10R10 packs R, G, B
+//                  (bits 0-9, 10-19, 20-29): (Re.r Re.g Re.b) (Re.a Im.r Im.g) (Im.b Im.a -)  12 B
+//                  plus one shared box-sum buffer: uvec2 per pixel, packHalf2x16 of sum(J) / M.
+// One buffer per component (bindings 4..9), so each stays under maxStorageBufferRange (128 MiB on
+// lavapipe: one f32 component at 1920x1080 is 66 MB).
+
+layout(constant_id = 0) const int COMPONENTS = 1;  // 1..6
+layout(constant_id = 1) const int RADIUS = 1;      // kernel radius R: taps at -R..R
+layout(constant_id = 2) const int LAYER = 0;       // 0 far, 1 near: which channel maxima M to use
+
+const int TAPS = 2 * RADIUS + 1;
+const float UNORM10_MAX = 1023.0;
+
+layout(std430, binding = 0) readonly buffer Kernel {
+  vec4 weight[6];   // (A / normalisation, B / normalisation, 0, 0)
+  vec4 bracket[6];  // (O_re, S_re, O_im, S_im): Garcia's bracketing of Re F and Im F
+  vec4 taps[];      // [c * TAPS + i]: (Re F, Im F, G'_re, G'_im), i = x + R
+} kernel;
+
+// Per-channel maxima M of the far (0..3) and near (4..7) RGBA layers as float bits (non-negative
+// floats order like their bits), reduced by circular_layers.comp.
+layout(std430, binding = 1) readonly buffer ChannelMax { uint max_bits[8]; };
+
+layout(std430, binding = 2) buffer Layer { vec4 layer[]; };  // this pass's RGBA layer (rgb w, w)
+layout(std430, binding = 3) buffer Box { uvec2 box_over_max[]; };  // bracketed10 only
+
+#if PRECISION == 0
+#define INTER_T vec4
+#elif PRECISION == 1
+#define INTER_T uvec4
+#else
+#define INTER_T uint
+#endif
+layout(std430, binding = 4) buffer Inter0 { INTER_T d[]; } inter0;
+layout(std430, binding = 5) buffer Inter1 { INTER_T d[]; } inter1;
+layout(std430, binding = 6) buffer Inter2 { INTER_T d[]; } inter2;
+layout(std430, binding = 7) buffer Inter3 { INTER_T d[]; } inter3;
+layout(std430, binding = 8) buffer Inter4 { INTER_T d[]; } inter4;
+layout(std430, binding = 9) buffer Inter5 { INTER_T d[]; } inter5;
+
+// c is a loop index over the specialization constant COMPONENTS: the switch folds after unrolling.
+INTER_T load_inter(int c, uint i) {
+  switch (c) {
+    case 0: return inter0.d[i];
+    case 1: return inter1.d[i];
+    case 2: return inter2.d[i];
+    case 3: return inter3.d[i];
+    case 4: return inter4.d[i];
+    default: return inter5.d[i];
+  }
+}
+
+void store_inter(int c, uint i, INTER_T v) {
+  switch (c) {
+    case 0: inter0.d[i] = v; break;
+    case 1: inter1.d[i] = v; break;
+    case 2: inter2.d[i] = v; break;
+    case 3: inter3.d[i] = v; break;
+    case 4: inter4.d[i] = v; break;
+    default: inter5.d[i] = v; break;
+  }
+}
+
+vec4 channel_max() {
+  const int o = 4 * LAYER;
+  return vec4(uintBitsToFloat(max_bits[o]), uintBitsToFloat(max_bits[o + 1]), uintBitsToFloat(max_bits[o + 2]),
+              uintBitsToFloat(max_bits[o + 3]));
+}
+
+uint pack_unorm10x3(uvec3 codes) { return codes.x | (codes.y << 10) | (codes.z << 20); }
+uvec3 unpack_unorm10x3(uint w) { return uvec3(w & 1023u, (w >> 10) & 1023u, (w >> 20) & 1023u); }
