@@ -2,10 +2,12 @@
 // Vulkan device and as CPU references, with spread, fitted growth exponents and naive/FLAG ratios.
 #include <chrono>
 #include <cstdlib>
+#include <map>
 #include <optional>
 
 #include <fmt/format.h>
 
+#include "accuracy.hpp"
 #include "coc.hpp"
 #include "commands.hpp"
 #include "parallel.hpp"
@@ -27,8 +29,9 @@ struct Figure9Options {
   std::vector<std::string> backends = {"gpu", "cpu"};
   double budget_s = 300;
   int cpu_threads = default_cpu_threads();
-  std::string out_dir = "results", plots_dir = "plots";
+  std::string out_dir = "results", plots_dir = "plots", reference_cache = "build/reference-cache";
   bool quick = false, plot = true;
+  int near_components = 0;  // circular filters: near-field components (0: the method's)
 };
 
 nlohmann::json distribution_json(const Distribution& d) {
@@ -110,6 +113,9 @@ void figure9(Figure9Options o) {
            {"sizes", o.sizes}, {"precision_override", o.precision}, {"cpu_threads", o.cpu_threads},
            {"budget_s", o.budget_s},
            {"scene_coc", "lens f-stop set per N so the scene's largest CoC radius equals the pattern's max radius"},
+           {"error", "each point's output against the exact scatter references (energy_sum: the plain sum naive and "
+                     "FLAG approximate; depth_ordered: composited front to back) of the same scene and CoC; PSNR peak "
+                     "= the reference's max value, null when exact"},
            {"timing",
             "gpu: Vulkan timestamps around each pass of one submission, after a JIT warm-up; cpu: wall clock. "
             "frame_ms is the distribution over repetitions, each the mean of its iterations"}}},
@@ -117,6 +123,16 @@ void figure9(Figure9Options o) {
          {"naive_over_flag", ratios},
          {"skipped", skipped},
          {"elapsed_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()}});
+  };
+
+  // Exact references per gather size (the lens, hence the CoC, follows N), computed once and cached.
+  ExactReferenceCache cache(o.reference_cache);
+  std::map<int, ExactReferences> references;
+  auto references_for = [&](int n, const Lens& lens) -> const ExactReferences& {
+    auto it = references.find(n);
+    if (it == references.end())
+      it = references.emplace(n, exact_references(scene, lens, GatherPattern{n, o.spacing_px}.max_radius_px(), cache)).first;
+    return it->second;
   };
 
   std::size_t index = 0;
@@ -134,12 +150,15 @@ void figure9(Figure9Options o) {
       for (int n : o.sizes) {
         ++index;
         if (Sweep::interrupted()) break;
-        const gpu::FilterOptions options{{n, o.spacing_px}, precision};
+        gpu::FilterOptions options{{n, o.spacing_px}, precision};
+        options.near_components = o.near_components;
         const std::string name = fmt::format("figure9/{}/{}/N:{}/k:{}", method, backend, n, o.spacing_px);
         try {
           const Lens lens = with_max_coc_radius(scene.lens, scene.depth_m, options.pattern.max_radius_px());
+          Image output;
           const PointStats stats = measure_method(*sweep, name, ctx ? &*ctx : nullptr, filter, backend, scene, lens,
-                                                  options, o.cpu_threads);
+                                                  options, o.cpu_threads, &output);
+          const nlohmann::json error = error_json(output, references_for(n, lens));
           series_list.back()["points"].push_back(
               {{"N", n},
                {"k", o.spacing_px},
@@ -150,10 +169,13 @@ void figure9(Figure9Options o) {
                {"pass_ms", stats.pass_ms},
                {"repetitions", stats.repetitions},
                {"iterations_per_repetition", stats.iterations_per_repetition},
-               {"measure_wall_s", stats.wall_s}});
-          fmt::print("[{:>3}/{}] {:<28} median {:10.3f} ms  IQR {:.3f}-{:.3f}  ({} reps x {} frames, {:.1f} s)\n", index,
-                     total, name, stats.frame_ms.median, stats.frame_ms.q1, stats.frame_ms.q3, stats.repetitions,
-                     stats.iterations_per_repetition, stats.wall_s);
+               {"measure_wall_s", stats.wall_s},
+               {"error", error}});
+          const auto& psnr = error["vs_energy_sum"]["psnr_db"];
+          fmt::print("[{:>3}/{}] {:<28} median {:10.3f} ms  IQR {:.3f}-{:.3f}  ({} reps x {} frames, {:.1f} s)  PSNR {}\n",
+                     index, total, name, stats.frame_ms.median, stats.frame_ms.q1, stats.frame_ms.q3,
+                     stats.repetitions, stats.iterations_per_repetition, stats.wall_s,
+                     psnr.is_null() ? "exact" : fmt::format("{:.1f} dB", psnr.get<double>()));
         } catch (const std::exception& e) {
           skipped.push_back({{"method", method}, {"backend", backend}, {"N", n}, {"reason", e.what()}});
           fmt::print("[{:>3}/{}] {:<28} skipped: {}\n", index, total, name, e.what());
@@ -187,11 +209,15 @@ void add_figure9_command(CLI::App& app) {
   cmd->add_option("--backends", o->backends, "gpu and/or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
   cmd->add_option("--precision", o->precision,
                   "Intermediate storage for the methods that accept it (default: each method's, FLAG: f16 as the paper)");
+  cmd->add_option("--near-components", o->near_components,
+                  "Circular filters: near-field components (default: the method's N; circular2 with 1 is Garcia's)")
+      ->check(CLI::Range(1, 6));
   cmd->add_option("--budget-s", o->budget_s, "Measuring time to aim for, spread over the points")->check(CLI::PositiveNumber);
   cmd->add_option("--cpu-threads", o->cpu_threads, "Threads for the CPU references")->check(CLI::Range(1, 1024));
   cmd->add_option("--device", o->device, "Vulkan device index or name part");
   cmd->add_option("--out-dir", o->out_dir, "Where figure9.json and figure9_gbench.json go");
   cmd->add_option("--plots-dir", o->plots_dir, "Where figure9.png and .svg go");
+  cmd->add_option("--reference-cache", o->reference_cache, "Directory caching the exact references");
   cmd->add_flag("--quick", o->quick, "Small sweep for CI and tests (200x150, N = 5, 9, 13)");
   cmd->add_flag("!--no-plot", o->plot, "Skip the plot");
   cmd->callback([o] { figure9(*o); });

@@ -2,8 +2,11 @@
 #include <chrono>
 #include <optional>
 
+#include <filesystem>
+
 #include <fmt/format.h>
 
+#include "accuracy.hpp"
 #include "coc.hpp"
 #include "commands.hpp"
 #include "image_io.hpp"
@@ -21,14 +24,41 @@ struct RenderOptions {
   std::string out_path = "render.png";
   int width_px = 800, height_px = 600, size_n = 41, spacing_px = 2;
   std::optional<double> fit_max_coc_px;
+  int near_components = 0;  // circular filters: near-field components (0: the method's)
+  bool compare = false;
+  std::string reference_cache = "build/reference-cache";
 };
+
+// Beside OUT: OUT_compare.png with the exact reference, the result and an error heat map, so a
+// person can see where a method fails (edges, highlights, large radii).
+void write_comparison(const Scene& scene, const Image& result, float max_radius_px, const RenderOptions& o) {
+  ExactReferenceCache cache(o.reference_cache);
+  const ExactReferences refs = exact_references(scene, scene.lens, max_radius_px, cache);
+  const nlohmann::json error = error_json(result, refs);
+  for (const char* which : {"vs_energy_sum", "vs_depth_ordered"}) {
+    const auto& m = error[which];
+    fmt::print("  {:<17} PSNR {:>8}  RMSE {:.4g}  max |err| {:.4g}  energy err {:.2e}  SSIM {:.4f}\n", which,
+               m["psnr_db"].is_null() ? "exact" : fmt::format("{:.2f} dB", m["psnr_db"].get<double>()),
+               m["rmse"].get<double>(), m["max_abs_error"].get<double>(),
+               m["mean_relative_energy_error"].is_null() ? 0.0 : m["mean_relative_energy_error"].get<double>(),
+               m["ssim"].get<double>());
+  }
+  const std::filesystem::path out(o.out_path);
+  const std::string sheet_path = (out.parent_path() / (out.stem().string() + "_compare.png")).string();
+  write_display_image(contact_sheet({{"exact scatter (energy sum)", to_display_srgb(refs.energy_sum)},
+                                     {o.method + " (" + o.backend + ")", to_display_srgb(result)},
+                                     {"|error| of luminance (99th pct = top)", error_heat_map(result, refs.energy_sum)}}),
+                      sheet_path);
+  fmt::print("wrote {}\n", sheet_path);
+}
 
 void render(const RenderOptions& o) {
   Scene scene = o.color_path.empty() ? make_scene(o.scene_name, o.width_px, o.height_px)
                                      : load_scene(o.color_path, o.depth_path);
   if (!o.lens_path.empty()) scene.lens = load_lens_json(o.lens_path);
   const FilterRegistration& filter = find_filter(o.method);
-  const gpu::FilterOptions options{{o.size_n, o.spacing_px}, o.precision.empty() ? filter.precisions.front() : o.precision};
+  gpu::FilterOptions options{{o.size_n, o.spacing_px}, o.precision.empty() ? filter.precisions.front() : o.precision};
+  options.near_components = o.near_components;
   validate(options.pattern);
   if (o.fit_max_coc_px) scene.lens = with_max_coc_radius(scene.lens, scene.depth_m, *o.fit_max_coc_px);
 
@@ -54,6 +84,7 @@ void render(const RenderOptions& o) {
   }
   write_image(result, o.out_path);
   fmt::print("wrote {}\n", o.out_path);
+  if (o.compare) write_comparison(scene, result, options.pattern.max_radius_px(), o);
 }
 
 }  // namespace
@@ -79,9 +110,15 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
   cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px");
   cmd->add_option("--precision", o->precision, "Intermediate storage, e.g. FLAG layers f16 or f32 (default: the method's)");
+  cmd->add_option("--near-components", o->near_components,
+                  "Circular filters: near-field components (default: the method's N; circular2 with 1 is Garcia's)")
+      ->check(CLI::Range(1, 6));
   cmd->add_option("--backend", o->backend, "gpu (Vulkan) or cpu (reference)")->check(CLI::IsMember({"gpu", "cpu"}));
   cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--out", o->out_path, "Output image: .exr (linear) or .png (tone-mapped)");
+  cmd->add_flag("--compare", o->compare,
+                "Also report error vs the exact reference and write OUT_compare.png (reference, result, error map)");
+  cmd->add_option("--reference-cache", o->reference_cache, "Directory caching the exact references");
   cmd->callback([o] { render(*o); });
 }
 

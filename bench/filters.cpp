@@ -1,26 +1,62 @@
 #include "filters.hpp"
 
 #include <stdexcept>
+#include <string>
 
+#include "circular_separable.hpp"
 #include "flag.hpp"
 #include "gpu/gpu_filters.hpp"
 #include "naive_gather.hpp"
 
 namespace bokeh {
 
+namespace {
+
+// circularN: Garcia's circular separable filter with N far-field components. The near field uses
+// FilterOptions::near_components if > 0, else N as well; Garcia's production choice (Frostbite) is
+// `--method circular2 --near-components 1`. Both kernels blur a disc of radius k (N - 1) / 2, the
+// gather pattern's max radius: the circular filters take their (fixed) kernel radius from the same
+// gather-size axis as naive and FLAG, so a figure9 sweep compares them at the same largest CoC, and
+// the per-pixel CoC enters only through the near/far alpha w = radius / max radius.
+FilterRegistration circular_registration(int components) {
+  return {"circular" + std::to_string(components),
+          std::to_string(components) +
+              "-component circular separable convolution (Garcia 2018): complex-Gaussian horizontal + vertical "
+              "passes on near/far layers, fixed disc of radius k(N-1)/2 (near components: --near-components)",
+          {"f32", "f16", "bracketed10"},
+          [components](const CpuFilterInput& in) {
+            CircularFilterConfig config;
+            config.far_components = components;
+            config.near_components = in.options.near_components > 0 ? in.options.near_components : components;
+            config.max_radius_px = static_cast<int>(in.options.pattern.max_radius_px());
+            config.precision = intermediate_precision_from_string(in.options.precision);
+            return circular_blur(in.color, in.radius_px, in.depth_m, in.lens.focus_distance_m, config, in.threads);
+          },
+          [components](gpu::GpuFrame& frame, const gpu::FilterOptions& options) {
+            return gpu::make_circular_gpu(frame, options, components);
+          },
+          /*samples_pattern=*/false};
+}
+
+}  // namespace
+
 const std::vector<FilterRegistration>& registered_filters() {
-  static const std::vector<FilterRegistration> filters = {
-      {"naive", "naive quadratic gather, N x N samples at spacing k (FLAG paper 3.1)", {"f32"},
-       [](const CpuFilterInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); },
-       gpu::make_naive_gpu},
-      {"flag", "FLAG: horizontal pass into a ceil(N/2)-layer 3D buffer, vertical pass (FLAG paper 3.2)",
-       {"f16", "f32"},
-       [](const CpuFilterInput& in) {
-         return flag_blur(in.packed, in.options.pattern, layer_precision_from_string(in.options.precision),
-                          in.threads);
-       },
-       gpu::make_flag_gpu},
-  };
+  static const std::vector<FilterRegistration> filters = [] {
+    std::vector<FilterRegistration> all = {
+        {"naive", "naive quadratic gather, N x N samples at spacing k (FLAG paper 3.1)", {"f32"},
+         [](const CpuFilterInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); },
+         gpu::make_naive_gpu},
+        {"flag", "FLAG: horizontal pass into a ceil(N/2)-layer 3D buffer, vertical pass (FLAG paper 3.2)",
+         {"f16", "f32"},
+         [](const CpuFilterInput& in) {
+           return flag_blur(in.packed, in.options.pattern, layer_precision_from_string(in.options.precision),
+                            in.threads);
+         },
+         gpu::make_flag_gpu},
+    };
+    for (int n = 1; n <= kMaxCircularComponents; ++n) all.push_back(circular_registration(n));
+    return all;
+  }();
   return filters;
 }
 

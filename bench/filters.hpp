@@ -29,6 +29,9 @@ struct FilterRegistration {
   std::vector<std::string> precisions;  // accepted FilterOptions::precision values, default first
   std::function<Image(const CpuFilterInput&)> cpu_reference;
   std::function<std::unique_ptr<gpu::GpuFilter>(gpu::GpuFrame&, const gpu::FilterOptions&)> make_gpu;
+  // Whether the gather pattern's N and k shape the result; false for fixed kernels that only take
+  // the pattern's max radius (sweeps then skip grids that would repeat the same configuration).
+  bool samples_pattern = true;
 };
 
 const std::vector<FilterRegistration>& registered_filters();

@@ -35,24 +35,30 @@ Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& c
 
 PointStats measure_method(Sweep& sweep, const std::string& name, vk::Context* ctx, const FilterRegistration& filter,
                           const std::string& backend, const Scene& scene, const Lens& lens,
-                          const gpu::FilterOptions& options, int cpu_threads) {
+                          const gpu::FilterOptions& options, int cpu_threads, Image* output) {
   check_precision(filter, options.precision);
   if (backend == "gpu") {
     if (!ctx) throw std::invalid_argument("gpu backend without a Vulkan context");
     gpu::GpuFrame frame(*ctx, scene.color, scene.depth_m, lens, options.pattern);
     auto gpu_filter = filter.make_gpu(frame, options);
     vk::TimestampQueries timer(*ctx, 16);
-    return sweep.measure(name, [&] { gpu::warm_up(frame, *gpu_filter, timer); },
-                         [&] { return gpu::run_frame(frame, *gpu_filter, timer); }, true);
+    const PointStats stats = sweep.measure(name, [&] { gpu::warm_up(frame, *gpu_filter, timer); },
+                                           [&] { return gpu::run_frame(frame, *gpu_filter, timer); }, true);
+    if (output) *output = frame.read_output();
+    return stats;
   }
-  if (backend == "cpu")
-    return sweep.measure(name, [] {},
-                         [&] {
-                           benchmark::DoNotOptimize(
-                               run_cpu(filter, scene.color, scene.depth_m, lens, options, cpu_threads));
-                           return std::vector<vk::PassTime>{};
-                         },
-                         false);
+  if (backend == "cpu") {
+    Image last;
+    const PointStats stats = sweep.measure(name, [] {},
+                                           [&] {
+                                             last = run_cpu(filter, scene.color, scene.depth_m, lens, options,
+                                                            cpu_threads);
+                                             return std::vector<vk::PassTime>{};
+                                           },
+                                           false);
+    if (output) *output = std::move(last);
+    return stats;
+  }
   throw std::invalid_argument("backend must be gpu or cpu, got '" + backend + "'");
 }
 

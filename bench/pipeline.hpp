@@ -24,9 +24,10 @@ Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& c
               const Lens& lens, const gpu::FilterOptions& options, std::vector<vk::PassTime>* pass_times = nullptr);
 
 // Times one method on "gpu" (Vulkan timestamps; ctx required) or "cpu" (wall clock, CoC pass
-// included) through `sweep`, under the Google Benchmark name `name`.
+// included) through `sweep`, under the Google Benchmark name `name`. `output`, if given, receives
+// the image the timed frames produced, so its error can be reported next to its time.
 PointStats measure_method(Sweep& sweep, const std::string& name, vk::Context* ctx, const FilterRegistration& filter,
                           const std::string& backend, const Scene& scene, const Lens& lens,
-                          const gpu::FilterOptions& options, int cpu_threads);
+                          const gpu::FilterOptions& options, int cpu_threads, Image* output = nullptr);
 
 }  // namespace bokeh

@@ -1,25 +1,122 @@
 #include "flag.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include <Imath/half.h>
+#include <fmt/format.h>
 
 namespace bokeh {
 
-const char* to_string(LayerPrecision precision) { return precision == LayerPrecision::f32 ? "f32" : "f16"; }
+namespace {
 
-LayerPrecision layer_precision_from_string(const std::string& name) {
-  if (name == "f32") return LayerPrecision::f32;
-  if (name == "f16") return LayerPrecision::f16;
-  throw std::invalid_argument("unknown layer precision '" + name + "' (expected f32 or f16)");
+struct PrecisionName {
+  LayerPrecision precision;
+  const char* name;
+};
+constexpr PrecisionName kNames[] = {{LayerPrecision::f32, "f32"},
+                                    {LayerPrecision::f16, "f16"},
+                                    {LayerPrecision::r11g11b10f, "r11g11b10f"},
+                                    {LayerPrecision::unorm10_bracketed, "unorm10_bracketed"},
+                                    {LayerPrecision::unorm16_bracketed, "unorm16_bracketed"}};
+
+}  // namespace
+
+const char* to_string(LayerPrecision precision) {
+  for (const auto& n : kNames)
+    if (n.precision == precision) return n.name;
+  return "unknown";
 }
 
-int bytes_per_texel(LayerPrecision precision) { return precision == LayerPrecision::f32 ? 16 : 8; }
+LayerPrecision layer_precision_from_string(const std::string& name) {
+  std::string known;
+  for (const auto& n : kNames) {
+    if (name == n.name) return n.precision;
+    known += (known.empty() ? "" : ", ") + std::string(n.name);
+  }
+  throw std::invalid_argument("unknown layer precision '" + name + "' (expected one of " + known + ")");
+}
+
+const std::vector<LayerPrecision>& all_layer_precisions() {
+  static const std::vector<LayerPrecision> all = {LayerPrecision::f32, LayerPrecision::f16, LayerPrecision::r11g11b10f,
+                                                  LayerPrecision::unorm10_bracketed,
+                                                  LayerPrecision::unorm16_bracketed};
+  return all;
+}
+
+int bytes_per_texel(LayerPrecision precision) {
+  switch (precision) {
+    case LayerPrecision::f32: return 16;
+    case LayerPrecision::f16: return 8;
+    case LayerPrecision::r11g11b10f: return 4;
+    case LayerPrecision::unorm10_bracketed: return 4;
+    case LayerPrecision::unorm16_bracketed: return 8;
+  }
+  throw std::invalid_argument("bytes_per_texel: unknown layer precision");
+}
+
+bool is_bracketed(LayerPrecision precision) {
+  return precision == LayerPrecision::unorm10_bracketed || precision == LayerPrecision::unorm16_bracketed;
+}
+
+bool is_unsigned(LayerPrecision precision) { return precision == LayerPrecision::r11g11b10f || is_bracketed(precision); }
+
+int bracket_levels(LayerPrecision precision) {
+  return precision == LayerPrecision::unorm10_bracketed ? 1023 : precision == LayerPrecision::unorm16_bracketed ? 65535 : 0;
+}
+
+float round_to_ufloat(float value, int mantissa_bits) {
+  if (!(value > 0.0f)) return 0.0f;  // unsigned format: negatives (and NaN) have no code
+  const float max_finite = std::ldexp(2.0f - std::ldexp(1.0f, -mantissa_bits), 15);
+  if (value >= max_finite) return max_finite;
+  int e = 0;
+  std::frexp(value, &e);                     // value in [2^(e-1), 2^e)
+  const int exponent = std::max(e - 1, -14);  // below 2^-14: subnormal, fixed spacing
+  const float quantum = std::ldexp(1.0f, exponent - mantissa_bits);
+  return std::nearbyint(value / quantum) * quantum;  // exact division by a power of two; ties to even
+}
+
+float round_layer_value(float value, LayerPrecision precision, int channel) {
+  switch (precision) {
+    case LayerPrecision::f32: return value;
+    case LayerPrecision::f16: return static_cast<float>(Imath::half(value));
+    case LayerPrecision::r11g11b10f: return round_to_ufloat(value, channel == 2 ? 5 : 6);
+    default: throw std::invalid_argument(std::string("round_layer_value: ") + to_string(precision) + " is bracketed");
+  }
+}
+
+float bracket_round_trip(float value, float offset, float scale, int levels) {
+  if (!(scale > 0.0f)) return offset;
+  const float q = std::clamp((value - offset) / scale, 0.0f, 1.0f);
+  const float code = std::nearbyint(q * static_cast<float>(levels));
+  return offset + scale * (code / static_cast<float>(levels));
+}
+
+void check_layer_input(const Image& packed, LayerPrecision precision) {
+  if (!is_unsigned(precision)) return;
+  for (int y = 0; y < packed.height; ++y)
+    for (int x = 0; x < packed.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float v = packed.px(x, y)[c];
+        if (!(v >= 0.0f))
+          throw std::invalid_argument(fmt::format(
+              "FLAG layer precision {} stores only non-negative values, but the colour at pixel ({}, {}) has channel "
+              "{} = {}: colours must be >= 0 (use f16 or f32 layers for negative colours)",
+              to_string(precision), x, y, c, v));
+      }
+}
 
 FlagLayers flag_horizontal(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
+  check_layer_input(packed, precision);
   const int n = p.half(), k = p.spacing_px;
-  FlagLayers out{packed.width, packed.height, p.layers(), {}};
+  const bool bracketed = is_bracketed(precision);
+  FlagLayers out{packed.width, packed.height, p.layers(), {}, {}, {}};
   out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * out.layers * 3, 0.0f);
+  if (bracketed) {
+    out.bracket_offset.assign(static_cast<std::size_t>(out.height) * out.layers * 3, 0.0f);
+    out.bracket_scale.assign(out.bracket_offset.size(), 0.0f);
+  }
   parallel_rows(packed.height, threads, [&](int y) {
     std::vector<float> reach(static_cast<std::size_t>(out.layers) * 3);
     for (int x = 0; x < packed.width; ++x) {
@@ -39,10 +136,26 @@ FlagLayers flag_horizontal(const Image& packed, const GatherPattern& p, LayerPre
         float* dst = out.at(x, y, z);
         for (int c = 0; c < 3; ++c) {
           running[c] += reach[z * 3 + c];
-          dst[c] = precision == LayerPrecision::f16 ? static_cast<float>(Imath::half(running[c])) : running[c];
+          dst[c] = bracketed ? running[c] : round_layer_value(running[c], precision, c);
         }
       }
     }
+    if (!bracketed) return;
+    // Bracketing: the row's f32 values of each layer and channel span [offset, offset + scale]
+    // (what the GPU's bracket pass records with atomicMin/atomicMax), then each is quantised.
+    const int levels = bracket_levels(precision);
+    for (int z = 0; z <= n; ++z)
+      for (int c = 0; c < 3; ++c) {
+        float lo = out.at(0, y, z)[c], hi = lo;
+        for (int x = 1; x < out.width; ++x) lo = std::min(lo, out.at(x, y, z)[c]), hi = std::max(hi, out.at(x, y, z)[c]);
+        const float scale = hi - lo;
+        out.bracket_offset[out.bracket_index(y, z, c)] = lo;
+        out.bracket_scale[out.bracket_index(y, z, c)] = scale;
+        for (int x = 0; x < out.width; ++x) {
+          float& v = out.at(x, y, z)[c];
+          v = bracket_round_trip(v, lo, scale, levels);
+        }
+      }
   });
   return out;
 }
@@ -68,6 +181,30 @@ Image flag_vertical(const FlagLayers& layers, const GatherPattern& p, int thread
 
 Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
   return flag_vertical(flag_horizontal(packed, p, precision, threads), p, threads);
+}
+
+Image flag_blur_in_strips(const Image& packed, const GatherPattern& p, LayerPrecision precision, int strip_px,
+                          int threads) {
+  if (is_bracketed(precision))
+    throw std::invalid_argument(std::string("flag_blur_in_strips: ") + to_string(precision) +
+                                " brackets whole rows; use flag_blur");
+  if (strip_px < 1) throw std::invalid_argument("flag_blur_in_strips: strip width must be >= 1");
+  const int halo = p.half() * p.spacing_px;
+  Image out(packed.width, packed.height, 3);
+  for (int x0 = 0; x0 < packed.width; x0 += strip_px) {
+    const int x1 = std::min(packed.width, x0 + strip_px);
+    const int cx0 = std::max(0, x0 - halo), cx1 = std::min(packed.width, x1 + halo);
+    // Every source column the strip's pixels gather from lies in [cx0, cx1): the crop's result is
+    // the frame's, sample for sample.
+    Image crop(cx1 - cx0, packed.height, packed.channels);
+    for (int y = 0; y < packed.height; ++y)
+      std::copy(packed.px(cx0, y), packed.px(cx0, y) + static_cast<std::size_t>(crop.width) * packed.channels,
+                crop.px(0, y));
+    const Image blurred = flag_blur(crop, p, precision, threads);
+    for (int y = 0; y < packed.height; ++y)
+      std::copy(blurred.px(x0 - cx0, y), blurred.px(x1 - cx0, y), out.px(x0, y));
+  }
+  return out;
 }
 
 }  // namespace bokeh

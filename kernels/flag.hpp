@@ -1,6 +1,15 @@
 #pragma once
 // FLAG (FLAG paper section 3.2): a horizontal pass writing a 3D buffer of per-layer cumulative row
 // contributions, then a vertical pass summing layer |dy| of each row. Linear in N per pixel.
+//
+// Vertical symmetry (paper 3.2.2: "If the blur shape has vertical symmetry, the memory requirements
+// can be halved"): this layout already takes that halving. A disc is symmetric about its row, so the
+// contribution of row Y to the pixel dy rows above equals its contribution dy rows below; the buffer
+// stores one layer per |dy| = z k, ceil(N/2) = (N + 1) / 2 layers instead of N, and the vertical pass
+// reads layer |j| for both row y + j k and row y - j k. There is nothing further to halve for discs.
+#include <string>
+#include <vector>
+
 #include "gather_pattern.hpp"
 #include "image.hpp"
 #include "parallel.hpp"
@@ -8,25 +17,68 @@
 namespace bokeh {
 
 // How the 3D buffer stores its layers. The CPU reference rounds each stored value the way the
-// GPU's image format does, so precision effects can be checked on the CPU.
-enum class LayerPrecision { f32, f16 };
+// GPU's image format does, so precision effects can be checked on the CPU:
+//   f32                RGBA32F, 16 B/texel: exact.
+//   f16                RGBA16F, 8 B (the paper's): round to nearest even, 11 significant bits
+//                      (relative error <= 2^-11; a driver rounding toward zero gives up to 2^-10).
+//   r11g11b10f         B10G11R11_UFLOAT_PACK32, 4 B: unsigned floats with 5 exponent bits (bias 15)
+//                      and 6 (R, G) / 5 (B) mantissa bits, emulated exactly with round to nearest even
+//                      (relative error <= 2^-7 R/G, 2^-6 B; toward zero: 2^-6, 2^-5). No sign bit.
+//   unorm10_bracketed  A2B10G10R10_UNORM_PACK32, 4 B: RGB as 10-bit codes of (v - offset) / scale,
+//   unorm16_bracketed  R16G16B16A16_UNORM, 8 B: 16-bit codes of the same; alpha unused.
+// Bracketing (Garcia 2018, appendix; here applied to FLAG's layers): offset and scale are kept per
+// row, layer and channel: offset = the smallest value of that layer along the row, scale = largest -
+// smallest, both of the f32 values the horizontal pass computes. The stored code is
+// round((v - offset) / scale * (2^b - 1)) and the vertical pass reads offset + scale * code / (2^b - 1):
+// absolute error <= scale / (2^b - 1) / 2 (one code, scale / (2^b - 1), for a driver that may pick
+// either neighbour, as Vulkan allows). A layer that is constant along its row (scale 0) is exact.
+// Layer values are cumulative sums of colour / area, so they are >= 0 exactly when colours are:
+// the unsigned precisions (r11g11b10f and both bracketed) reject negative colours with an error.
+enum class LayerPrecision { f32, f16, r11g11b10f, unorm10_bracketed, unorm16_bracketed };
 const char* to_string(LayerPrecision precision);
 LayerPrecision layer_precision_from_string(const std::string& name);  // throws on unknown names
+const std::vector<LayerPrecision>& all_layer_precisions();           // in the order above
 int bytes_per_texel(LayerPrecision precision);  // RGBA texel as the GPU stores it
+bool is_bracketed(LayerPrecision precision);
+bool is_unsigned(LayerPrecision precision);  // r11g11b10f and the bracketed ones: no negative values
+int bracket_levels(LayerPrecision precision);  // 2^b - 1 of a bracketed precision (1023, 65535), else 0
+
+// One stored value through a per-value format (f32, f16, r11g11b10f) as the CPU emulation rounds it;
+// `channel` 0..2 (r11g11b10f has a 5-bit mantissa in blue). Throws for bracketed precisions.
+float round_layer_value(float value, LayerPrecision precision, int channel);
+// An unsigned float with 5 exponent bits (bias 15, subnormals) and `mantissa_bits`, round to nearest
+// even; <= 0 and NaN give 0, values over the largest finite one clamp to it.
+float round_to_ufloat(float value, int mantissa_bits);
+// A bracketed value as the vertical pass reads it back: offset + scale * round((v - offset) / scale * L) / L.
+float bracket_round_trip(float value, float offset, float scale, int levels);
 
 struct FlagLayers {
   int width = 0, height = 0, layers = 0;
-  std::vector<float> rgb;  // [(layer * height + y) * width + x] * 3
+  std::vector<float> rgb;  // [(layer * height + y) * width + x] * 3, as the vertical pass reads them
+  // Bracketed precisions only: per row, layer and channel, [(y * layers + z) * 3 + c].
+  std::vector<float> bracket_offset, bracket_scale;
   float* at(int x, int y, int z) { return rgb.data() + ((static_cast<std::size_t>(z) * height + y) * width + x) * 3; }
   const float* at(int x, int y, int z) const {
     return rgb.data() + ((static_cast<std::size_t>(z) * height + y) * width + x) * 3;
   }
+  std::size_t bracket_index(int y, int z, int c) const { return (static_cast<std::size_t>(y) * layers + z) * 3 + c; }
 };
+
+// Throws std::invalid_argument naming the first pixel with a negative (or NaN) colour channel if
+// `precision` cannot store negative values. packed: RGBA (rgb / area, radius) or plain RGB.
+void check_layer_input(const Image& packed, LayerPrecision precision);
 
 FlagLayers flag_horizontal(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                            int threads = default_cpu_threads());
 Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads());
 Image flag_blur(const Image& packed, const GatherPattern& pattern, LayerPrecision precision = LayerPrecision::f32,
                 int threads = default_cpu_threads());
+
+// flag_blur computed on vertical strips of `strip_px` columns (each with the horizontal pass's halo
+// of k (N - 1) / 2 columns), so the 3D buffer held at once is a strip's, not the frame's. Bit for bit
+// flag_blur's result for the per-value precisions; throws for bracketed ones (their offsets and scales
+// span whole rows). This is how `bokehbench buffers` computes its 4K f32 reference on the CPU.
+Image flag_blur_in_strips(const Image& packed, const GatherPattern& pattern, LayerPrecision precision, int strip_px,
+                          int threads = default_cpu_threads());
 
 }  // namespace bokeh

@@ -43,28 +43,11 @@ layout(std430, binding = 7) buffer Inter3 { INTER_T d[]; } inter3;
 layout(std430, binding = 8) buffer Inter4 { INTER_T d[]; } inter4;
 layout(std430, binding = 9) buffer Inter5 { INTER_T d[]; } inter5;
 
-// c is a loop index over the specialization constant COMPONENTS: the switch folds after unrolling.
-INTER_T load_inter(int c, uint i) {
-  switch (c) {
-    case 0: return inter0.d[i];
-    case 1: return inter1.d[i];
-    case 2: return inter2.d[i];
-    case 3: return inter3.d[i];
-    case 4: return inter4.d[i];
-    default: return inter5.d[i];
-  }
-}
-
-void store_inter(int c, uint i, INTER_T v) {
-  switch (c) {
-    case 0: inter0.d[i] = v; break;
-    case 1: inter1.d[i] = v; break;
-    case 2: inter2.d[i] = v; break;
-    case 3: inter3.d[i] = v; break;
-    case 4: inter4.d[i] = v; break;
-    default: inter5.d[i] = v; break;
-  }
-}
+// Per-component code is written once as a macro X(c, buffer) and expanded for c = 0..5 with literal
+// indices, each copy guarded by `c < COMPONENTS` (a specialization constant, so the guard folds when
+// the pipeline is built). No private arrays indexed by a loop variable and no switch over buffers:
+// llvmpipe (lavapipe) keeps every accumulator in registers only when all indices are constants.
+#define FOR_EACH_COMPONENT(X) X(0, inter0) X(1, inter1) X(2, inter2) X(3, inter3) X(4, inter4) X(5, inter5)
 
 vec4 channel_max() {
   const int o = 4 * LAYER;

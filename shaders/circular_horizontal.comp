@@ -9,51 +9,61 @@
 #include "common.glsl"
 #include "circular_common.glsl"
 
+#if PRECISION == 2
+#define TAP_RE t.z  // G'_re
+#define TAP_IM t.w  // G'_im
+#else
+#define TAP_RE t.x  // Re F
+#define TAP_IM t.y  // Im F
+#endif
+
 void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (outside(p)) return;
   const uint row = uint(p.y * params.width_px);
-  vec4 re[COMPONENTS], im[COMPONENTS];
-  for (int c = 0; c < COMPONENTS; ++c) re[c] = vec4(0.0), im[c] = vec4(0.0);
+#define DECLARE(c, buf) vec4 re##c = vec4(0.0), im##c = vec4(0.0);
+  FOR_EACH_COMPONENT(DECLARE)
   vec4 box = vec4(0.0);
   for (int i = 0; i < TAPS; ++i) {
     const vec4 j = layer[row + uint(clamp(p.x + i - RADIUS, 0, params.width_px - 1))];
-    for (int c = 0; c < COMPONENTS; ++c) {
-      const vec4 t = kernel.taps[c * TAPS + i];
-#if PRECISION == 2
-      re[c] += t.z * j;
-      im[c] += t.w * j;
-#else
-      re[c] += t.x * j;
-      im[c] += t.y * j;
-#endif
-    }
+#define ACCUMULATE(c, buf)                     \
+  if (c < COMPONENTS) {                        \
+    const vec4 t = kernel.taps[c * TAPS + i];  \
+    re##c += TAP_RE * j;                       \
+    im##c += TAP_IM * j;                       \
+  }
+    FOR_EACH_COMPONENT(ACCUMULATE)
 #if PRECISION == 2
     box += j;
 #endif
   }
   const uint pixel = index_of(p);
-  for (int c = 0; c < COMPONENTS; ++c) {
 #if PRECISION == 0
-    store_inter(c, 2u * pixel, re[c]);
-    store_inter(c, 2u * pixel + 1u, im[c]);
-#elif PRECISION == 1
-    store_inter(c, pixel, uvec4(packHalf2x16(re[c].rg), packHalf2x16(re[c].ba), packHalf2x16(im[c].rg),
-                                packHalf2x16(im[c].ba)));
-#else
-    const vec4 m = channel_max();
-    const vec4 inv_max = vec4(m.x > 0.0 ? 1.0 / m.x : 0.0, m.y > 0.0 ? 1.0 / m.y : 0.0,
-                              m.z > 0.0 ? 1.0 / m.z : 0.0, m.w > 0.0 ? 1.0 / m.w : 0.0);
-    // As the CPU: nearbyint (round half to even) of clamp(I' / M, 0, 1) * 1023.
-    const uvec4 code_re = uvec4(roundEven(clamp(re[c] * inv_max, 0.0, 1.0) * UNORM10_MAX));
-    const uvec4 code_im = uvec4(roundEven(clamp(im[c] * inv_max, 0.0, 1.0) * UNORM10_MAX));
-    store_inter(c, 3u * pixel, pack_unorm10x3(code_re.rgb));
-    store_inter(c, 3u * pixel + 1u, pack_unorm10x3(uvec3(code_re.a, code_im.rg)));
-    store_inter(c, 3u * pixel + 2u, pack_unorm10x3(uvec3(code_im.ba, 0u)));
-    if (c == 0) {
-      const vec4 b = box * inv_max;
-      box_over_max[pixel] = uvec2(packHalf2x16(b.rg), packHalf2x16(b.ba));
-    }
-#endif
+#define STORE(c, buf)            \
+  if (c < COMPONENTS) {          \
+    buf.d[2u * pixel] = re##c;   \
+    buf.d[2u * pixel + 1u] = im##c; \
   }
+#elif PRECISION == 1
+#define STORE(c, buf)                                                                                 \
+  if (c < COMPONENTS)                                                                                 \
+    buf.d[pixel] = uvec4(packHalf2x16(re##c.rg), packHalf2x16(re##c.ba), packHalf2x16(im##c.rg),      \
+                         packHalf2x16(im##c.ba));
+#else
+  const vec4 m = channel_max();
+  const vec4 inv_max = vec4(m.x > 0.0 ? 1.0 / m.x : 0.0, m.y > 0.0 ? 1.0 / m.y : 0.0, m.z > 0.0 ? 1.0 / m.z : 0.0,
+                            m.w > 0.0 ? 1.0 / m.w : 0.0);
+  const vec4 b = box * inv_max;
+  box_over_max[pixel] = uvec2(packHalf2x16(b.rg), packHalf2x16(b.ba));
+  // As the CPU: nearbyint (round half to even) of clamp(I' / M, 0, 1) * 1023.
+#define STORE(c, buf)                                                                        \
+  if (c < COMPONENTS) {                                                                      \
+    const uvec4 code_re = uvec4(roundEven(clamp(re##c * inv_max, 0.0, 1.0) * UNORM10_MAX));  \
+    const uvec4 code_im = uvec4(roundEven(clamp(im##c * inv_max, 0.0, 1.0) * UNORM10_MAX));  \
+    buf.d[3u * pixel] = pack_unorm10x3(code_re.rgb);                                         \
+    buf.d[3u * pixel + 1u] = pack_unorm10x3(uvec3(code_re.a, code_im.rg));                   \
+    buf.d[3u * pixel + 2u] = pack_unorm10x3(uvec3(code_im.ba, 0u));                          \
+  }
+#endif
+  FOR_EACH_COMPONENT(STORE)
 }

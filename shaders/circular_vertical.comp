@@ -16,46 +16,56 @@ layout(std430, binding = 11) buffer Out { vec4 result[]; };
 
 const float MIN_FAR_ALPHA = 1e-4;  // kMinFarAlpha in kernels/circular_separable.cpp
 
-void load_complex(int c, uint pixel, out vec4 re, out vec4 im) {
+// H_c at `pixel` from component buffer `buf` into vec4 re, im.
 #if PRECISION == 0
-  re = load_inter(c, 2u * pixel);
-  im = load_inter(c, 2u * pixel + 1u);
+#define LOAD_COMPLEX(c, buf, pixel)        \
+  const vec4 h_re = buf.d[2u * pixel];     \
+  const vec4 h_im = buf.d[2u * pixel + 1u];
 #elif PRECISION == 1
-  const uvec4 w = load_inter(c, pixel);
-  re = vec4(unpackHalf2x16(w.x), unpackHalf2x16(w.y));
-  im = vec4(unpackHalf2x16(w.z), unpackHalf2x16(w.w));
+#define LOAD_COMPLEX(c, buf, pixel)                                                  \
+  const uvec4 w = buf.d[pixel];                                                      \
+  const vec4 h_re = vec4(unpackHalf2x16(w.x), unpackHalf2x16(w.y));                  \
+  const vec4 h_im = vec4(unpackHalf2x16(w.z), unpackHalf2x16(w.w));
 #else
-  const uvec3 a = unpack_unorm10x3(load_inter(c, 3u * pixel));
-  const uvec3 b = unpack_unorm10x3(load_inter(c, 3u * pixel + 1u));
-  const uvec3 d = unpack_unorm10x3(load_inter(c, 3u * pixel + 2u));
-  const vec4 code_re = vec4(a, b.x), code_im = vec4(b.yz, d.xy);
-  const vec4 m = channel_max();
-  const uvec2 bw = box_over_max[pixel];
-  const vec4 box = vec4(unpackHalf2x16(bw.x), unpackHalf2x16(bw.y)) * m;
-  const vec4 k = kernel.bracket[c];  // (O_re, S_re, O_im, S_im)
-  re = k.y * (code_re / UNORM10_MAX * m) + k.x * box;
-  im = k.w * (code_im / UNORM10_MAX * m) + k.z * box;
+// I = S (code / 1023 M) + O (sum(J) / M) M, as Intermediate::load on the CPU.
+#define LOAD_COMPLEX(c, buf, pixel)                                              \
+  const uvec3 w0 = unpack_unorm10x3(buf.d[3u * pixel]);                          \
+  const uvec3 w1 = unpack_unorm10x3(buf.d[3u * pixel + 1u]);                     \
+  const uvec3 w2 = unpack_unorm10x3(buf.d[3u * pixel + 2u]);                     \
+  const vec4 code_re = vec4(w0, w1.x), code_im = vec4(w1.yz, w2.xy);             \
+  const vec4 k = kernel.bracket[c]; /* (O_re, S_re, O_im, S_im) */               \
+  const vec4 h_re = k.y * (code_re / UNORM10_MAX * m) + k.x * box;               \
+  const vec4 h_im = k.w * (code_im / UNORM10_MAX * m) + k.z * box;
 #endif
-}
 
 void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (outside(p)) return;
-  vec4 acc_re[COMPONENTS], acc_im[COMPONENTS];
-  for (int c = 0; c < COMPONENTS; ++c) acc_re[c] = vec4(0.0), acc_im[c] = vec4(0.0);
+#if PRECISION == 2
+  const vec4 m = channel_max();
+#endif
+#define DECLARE(c, buf) vec4 acc_re##c = vec4(0.0), acc_im##c = vec4(0.0);
+  FOR_EACH_COMPONENT(DECLARE)
   for (int j = 0; j < TAPS; ++j) {
     const int sy = clamp(p.y + j - RADIUS, 0, params.height_px - 1);
     const uint source = uint(sy * params.width_px + p.x);
-    for (int c = 0; c < COMPONENTS; ++c) {
-      const vec2 t = kernel.taps[c * TAPS + j].xy;
-      vec4 h_re, h_im;
-      load_complex(c, source, h_re, h_im);
-      acc_re[c] += t.x * h_re - t.y * h_im;
-      acc_im[c] += t.x * h_im + t.y * h_re;
-    }
+#if PRECISION == 2
+    const uvec2 bw = box_over_max[source];
+    const vec4 box = vec4(unpackHalf2x16(bw.x), unpackHalf2x16(bw.y)) * m;
+#endif
+#define ACCUMULATE(c, buf)                            \
+  if (c < COMPONENTS) {                               \
+    const vec2 t = kernel.taps[c * TAPS + j].xy;      \
+    LOAD_COMPLEX(c, buf, source)                      \
+    acc_re##c += t.x * h_re - t.y * h_im;             \
+    acc_im##c += t.x * h_im + t.y * h_re;             \
+  }
+    FOR_EACH_COMPONENT(ACCUMULATE)
   }
   vec4 b = vec4(0.0);
-  for (int c = 0; c < COMPONENTS; ++c) b += kernel.weight[c].x * acc_re[c] + kernel.weight[c].y * acc_im[c];
+#define COMBINE(c, buf) \
+  if (c < COMPONENTS) b += kernel.weight[c].x * acc_re##c + kernel.weight[c].y * acc_im##c;
+  FOR_EACH_COMPONENT(COMBINE)
 
   const uint i = index_of(p);
   if (LAYER == 0) {

@@ -8,6 +8,9 @@ namespace bokeh::gpu {
 
 std::unique_ptr<GpuFilter> make_naive_gpu(GpuFrame& frame, const FilterOptions& options);
 std::unique_ptr<GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options);
+// Circular separable filter with `components` (1..6) far-field components; the near field uses
+// options.near_components when > 0, else the same count. Disc radius: options.pattern.max_radius_px().
+std::unique_ptr<GpuFilter> make_circular_gpu(GpuFrame& frame, const FilterOptions& options, int components);
 
 VkFormat layer_format(LayerPrecision precision);  // FLAG's 3D buffer format
 

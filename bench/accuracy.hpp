@@ -1,0 +1,30 @@
+#pragma once
+// Accuracy next to every timing: a result's error against the exact scatter references of the
+// same scene, lens and resolution (kernels/exact_scatter.hpp, cached on disk).
+#include <nlohmann/json.hpp>
+
+#include "exact_scatter.hpp"
+#include "lens.hpp"
+#include "metrics.hpp"
+#include "scene.hpp"
+
+namespace bokeh {
+
+// energy_sum: every pixel spreads its colour uniformly over its disc (what naive and FLAG
+// approximate; the headline metric). depth_ordered: the same discs composited front to back (what a
+// camera would show, as far as one image allows).
+struct ExactReferences {
+  Image energy_sum;
+  Image depth_ordered;
+};
+
+// The CoC radii are the ones every method sees: equation (1) clamped to max_radius_px.
+ExactReferences exact_references(const Scene& scene, const Lens& lens, float max_radius_px,
+                                 ExactReferenceCache& cache);
+
+// {"vs_energy_sum": metrics, "vs_depth_ordered": metrics}. PSNR is null when the result is exact
+// (RMSE 0, PSNR +inf): JSON has no infinity.
+nlohmann::json error_json(const Image& result, const ExactReferences& references);
+nlohmann::json metrics_json(const ErrorMetrics& m);
+
+}  // namespace bokeh
