@@ -12,6 +12,7 @@
 #include "parallel.hpp"
 #include "pipeline.hpp"
 #include "report.hpp"
+#include "stats.hpp"
 
 namespace bokeh {
 
@@ -37,24 +38,16 @@ GatherPattern parse_pattern(const std::string& text) {
   return p;
 }
 
-// Indices of the configurations no other beats on both time (median) and PSNR, fastest first.
+// Configurations nothing beats on both median time and PSNR (exact = +inf), fastest first. PSNRs
+// within 0.01 dB count as the same accuracy (e.g. FLAG f16 vs f32 on the same pattern).
 std::vector<std::size_t> pareto_front(const nlohmann::json& configs) {
-  std::vector<std::size_t> order(configs.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  auto time = [&](std::size_t i) { return configs[i]["frame_ms"]["median"].get<double>(); };
-  auto psnr = [&](std::size_t i) {
-    const auto& p = configs[i]["error"]["vs_energy_sum"]["psnr_db"];
-    return p.is_null() ? std::numeric_limits<double>::infinity() : p.get<double>();
-  };
-  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return time(a) < time(b); });
-  // A slower configuration joins the front only if it is measurably more accurate: PSNRs within
-  // 0.01 dB are the same accuracy (e.g. FLAG f16 vs f32 on the same pattern).
-  constexpr double kSameAccuracy_db = 0.01;
-  std::vector<std::size_t> front;
-  double best = -std::numeric_limits<double>::infinity();
-  for (std::size_t i : order)
-    if (psnr(i) > best + kSameAccuracy_db) front.push_back(i), best = psnr(i);
-  return front;
+  std::vector<double> time_ms, psnr_db;
+  for (const auto& c : configs) {
+    const auto& p = c["error"]["vs_energy_sum"]["psnr_db"];
+    time_ms.push_back(c["frame_ms"]["median"].get<double>());
+    psnr_db.push_back(p.is_null() ? std::numeric_limits<double>::infinity() : p.get<double>());
+  }
+  return bokeh::pareto_front(time_ms, psnr_db, 0.01);
 }
 
 void tradeoff(TradeoffOptions o) {

@@ -8,6 +8,7 @@ void add_devices_command(CLI::App& app);
 void add_render_command(CLI::App& app);
 void add_memory_command(CLI::App& app);
 void add_figure9_command(CLI::App& app);
+void add_kernels_command(CLI::App& app);
 void add_tradeoff_command(CLI::App& app);
 
 }  // namespace bokeh

@@ -5,6 +5,7 @@
 
 #include "circular_separable.hpp"
 #include "flag.hpp"
+#include "flag_reduced.hpp"
 #include "gpu/gpu_filters.hpp"
 #include "naive_gather.hpp"
 
@@ -47,10 +48,14 @@ const std::vector<FilterRegistration>& registered_filters() {
          [](const CpuFilterInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); },
          gpu::make_naive_gpu},
         {"flag", "FLAG: horizontal pass into a ceil(N/2)-layer 3D buffer, vertical pass (FLAG paper 3.2)",
-         {"f16", "f32"},
+         {"f16", "f32", "r11g11b10f", "unorm10_bracketed", "unorm16_bracketed"},
          [](const CpuFilterInput& in) {
-           return flag_blur(in.packed, in.options.pattern, layer_precision_from_string(in.options.precision),
-                            in.threads);
+           // FilterOptions::buffer_scale > 1: the reduced-resolution pipeline of kernels/flag_reduced.hpp.
+           const LayerPrecision precision = layer_precision_from_string(in.options.precision);
+           if (in.options.buffer_scale != 1)
+             return flag_reduced_blur(in.color, in.radius_px, in.options.pattern, in.options.buffer_scale, precision,
+                                      in.threads);
+           return flag_blur(in.packed, in.options.pattern, precision, in.threads);
          },
          gpu::make_flag_gpu},
     };

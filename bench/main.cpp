@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   CLI::App app{"bokehbench: cost, memory and accuracy of bokeh depth-of-field filters"};
   app.require_subcommand(1);
   bokeh::add_figure9_command(app);
+  bokeh::add_kernels_command(app);
   bokeh::add_tradeoff_command(app);
   bokeh::add_memory_command(app);
   bokeh::add_render_command(app);

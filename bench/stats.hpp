@@ -1,6 +1,9 @@
 #pragma once
 // Fits used in reports.
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <vector>
 
@@ -31,6 +34,24 @@ inline PowerLawFit fit_power_law(const std::vector<double>& x, const std::vector
   fit.r_squared = var_y > 0 ? cov * cov / (var_x * var_y) : 1.0;
   fit.points = static_cast<int>(x.size());
   return fit;
+}
+
+// Pareto front of (cost, quality): indices of the points that nothing beats on both, cheapest first.
+// A costlier point joins only if its quality exceeds the best so far by more than `same_quality`
+// (so measurement noise does not put equivalent configurations on the front).
+inline std::vector<std::size_t> pareto_front(const std::vector<double>& cost, const std::vector<double>& quality,
+                                             double same_quality = 0.0) {
+  if (cost.size() != quality.size()) throw std::invalid_argument("pareto_front: sizes differ");
+  std::vector<std::size_t> order(cost.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](auto a, auto b) {
+    return cost[a] < cost[b] || (cost[a] == cost[b] && quality[a] > quality[b]);
+  });
+  std::vector<std::size_t> front;
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::size_t i : order)
+    if (front.empty() || quality[i] > best + same_quality) front.push_back(i), best = quality[i];
+  return front;
 }
 
 }  // namespace bokeh

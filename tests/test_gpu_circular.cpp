@@ -199,8 +199,14 @@ void check_gpu_against_cpu(const Case& tc, const char* scene_name) {
   std::printf("[%s %s near %d %-11s] max |GPU - CPU| %.3g (%.3g of image max), E far %.3g near %.3g, worst err/bound %.3f\n",
               scene_name, method.c_str(), near_n, to_string(tc.precision), max_err, max_err / image_max, e_far, e_near,
               worst_ratio);
-  if (tc.precision == IntermediatePrecision::f32)  // the headline figure: f32 agrees to ~1e-5 of the image max
-    EXPECT_LT(max_err / image_max, 1e-5) << method;
+  // The headline figure: f32 agrees to 1e-5 of the image max. On lavapipe the same holds for f16 and
+  // bracketed10: its packHalf2x16 rounds to nearest like the CPU's Imath::half (the 10-bit codes use
+  // roundEven on both sides), so the stored values differ only where f32 noise crosses a rounding
+  // boundary (measured: <= 5e-7 of the image max, as f32). A driver that rounds half toward zero
+  // (allowed) only has to meet the derived bound above.
+  if (tc.precision == IntermediatePrecision::f32 || context().info().driver_name == "llvmpipe") {
+    EXPECT_LT(max_err / image_max, 1e-5) << method << " " << to_string(tc.precision);
+  }
 }
 
 class GpuCircular : public ::testing::TestWithParam<Case> {};
@@ -264,8 +270,9 @@ TEST(GpuCircularDisc, PointLightAtConstantCocMakesDiscOfRequestedRadius) {
       EXPECT_NEAR(total, 1.0, 1e-4) << n << " components: the disc keeps the light's energy";
       // As on the CPU (tests/test_circular.cpp): the profile crosses 1/2 within 0.3% past the edge;
       // the plateau estimate and the linear interpolation add a few hundredths of a pixel.
-      EXPECT_NEAR(half_plateau_radius(out, 0, c, c, disc), disc, 0.005 * disc + 0.05)
-          << n << " components, disc " << disc << " px";
+      const double measured = half_plateau_radius(out, 0, c, c, disc);
+      EXPECT_NEAR(measured, disc, 0.005 * disc + 0.05) << n << " components, disc " << disc << " px";
+      std::printf("[disc] %d components: requested %.1f px, measured %.3f px, energy %.6f\n", n, disc, measured, total);
     }
 }
 

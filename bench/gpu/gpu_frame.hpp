@@ -28,6 +28,7 @@ struct FilterOptions {
   // names it accepts, see FilterRegistration::precisions.
   std::string precision = "f16";
   int near_components = 0;  // circular filters: near-field component count (0: the method's own)
+  int buffer_scale = 1;     // FLAG only: 3D buffer at 1/scale resolution, 1 full, 2 half, 4 quarter (kernels/flag_reduced.hpp)
 };
 
 class GpuFrame {
