@@ -31,7 +31,7 @@ void memory(const MemoryOptions& o) {
   validate(pattern);
   fmt::print("FLAG 3D buffer, {}x{}, {}x{} gather ({} layers), device {}\n", o.width_px, o.height_px, o.size_n,
              o.size_n, pattern.layers(), ctx.info().name);
-  fmt::print("{:<9} {:<7} {:>14} {:>14} {:>16} {:>12} {:>12}\n", "precision", "scale", "buffer (texels)",
+  fmt::print("{:<17} {:<7} {:>14} {:>14} {:>16} {:>12} {:>12}\n", "precision", "scale", "buffer (texels)",
              "paper conv MiB", "allocated MiB", "allocated B", "paper prints");
   for (const auto& name : o.precisions) {
     const LayerPrecision precision = layer_precision_from_string(name);
@@ -41,7 +41,7 @@ void memory(const MemoryOptions& o) {
       const auto allocated = vk::image_3d_requirement_bytes(ctx, gpu::layer_format(precision), extent.width,
                                                             extent.height, extent.layers);
       const double printed = paper_printed_mb(o, precision, scale);
-      fmt::print("{:<9} 1/{:<5} {:>14} {:>14.2f} {:>16.2f} {:>12} {:>12}\n", name, scale,
+      fmt::print("{:<17} 1/{:<5} {:>14} {:>14.2f} {:>16.2f} {:>12} {:>12}\n", name, scale,
                  fmt::format("{}x{}x{}", extent.width, extent.height, extent.layers), paper_bytes / kMiB,
                  allocated / kMiB, allocated, printed > 0 ? fmt::format("{} MB", printed) : "-");
       nlohmann::json row = {{"width_px", o.width_px},
@@ -77,7 +77,8 @@ void add_memory_command(CLI::App& app) {
   cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(1, 16384));
   cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(1, 16384));
   cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
-  cmd->add_option("--precision", o->precisions, "Layer precisions")->check(CLI::IsMember({"f32", "f16"}));
+  cmd->add_option("--precision", o->precisions, "Layer precisions")
+      ->check(CLI::IsMember({"f32", "f16", "r11g11b10f", "unorm10_bracketed", "unorm16_bracketed"}));
   cmd->add_option("--scale", o->scales, "Buffer scales: 1 full, 2 half, 4 quarter")->check(CLI::IsMember({1, 2, 4}));
   cmd->add_option("--device", o->device, "Vulkan device index or name part");
   cmd->add_option("--out", o->out_path, "JSON output path");

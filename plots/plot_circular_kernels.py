@@ -32,7 +32,7 @@ def main(path, prefix):
     ax.plot(r_ideal, [1.0, 1.0, 0.0, 0.0], color="black", lw=1.2, ls="--", label="ideal disc (height 1)")
     for a in (ax, ax_err):
         a.axvspan(pass_end, stop_start, color="#000000", alpha=0.07, lw=0)
-    ax.text((pass_end + stop_start) / 2, 1.28, "transition\nband", ha="center", va="top", fontsize=8)
+    ax.text(stop_start + 0.02, 1.22, "shaded: transition band\nu in (1, 1.2)", ha="left", va="top", fontsize=8)
 
     for k, colour in zip(doc["kernels"], COLOURS):
         n = k["components"]
@@ -54,7 +54,7 @@ def main(path, prefix):
     ax.set_title("Radial profile of the circular separable kernels")
     ax.set_ylim(-0.3, 1.3)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right", title="measured max |K - ideal| outside the transition band",
+    ax.legend(fontsize=8, loc="lower left", title="measured max |K - ideal| outside the transition band",
               title_fontsize=8)
 
     ax_err.set_yscale("log")
@@ -65,12 +65,13 @@ def main(path, prefix):
     ax_err.grid(True, which="both", alpha=0.3)
     ax_err.legend(fontsize=8, loc="lower right", ncol=2)
 
-    costs = ", ".join(
-        f"{k['components']}: R={k['kernel_radius_px']} px, {k['taps_per_pixel']} taps"
+    costs = "; ".join(
+        f"{k['components']}: {k['kernel_radius_px']} / {k['taps_per_pixel']}"
         for k in doc["kernels"])
     fig.suptitle(
-        f"Circular separable DoF kernels (Niemitalo 2010 / Garcia 2018). At disc radius {cfg['disc_radius_px']:g} px "
-        f"per channel: {costs}.  {ctx['date_utc']}, commit {ctx['git_commit']}",
+        f"Circular separable DoF kernels (Niemitalo 2010 / Garcia 2018), {ctx['date_utc']}, commit {ctx['git_commit']}\n"
+        f"at disc radius {cfg['disc_radius_px']:g} px, components: kernel radius R (px) / taps per pixel and channel, "
+        f"both passes:  {costs}",
         fontsize=9)
     for ext in ("png", "svg"):
         fig.savefig(f"{prefix}.{ext}", dpi=110)

@@ -12,6 +12,7 @@
 layout(constant_id = 0) const int COMPONENTS = 1;  // 1..6
 layout(constant_id = 1) const int RADIUS = 1;      // kernel radius R: taps at -R..R
 layout(constant_id = 2) const int LAYER = 0;       // 0 far, 1 near: which channel maxima M to use
+layout(constant_id = 3) const int OUTPUTS = 1;     // output pixels per invocation along the pass
 
 const int TAPS = 2 * RADIUS + 1;
 const float UNORM10_MAX = 1023.0;

@@ -18,52 +18,66 @@
 #endif
 
 void main() {
-  const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  if (outside(p)) return;
-  const uint row = uint(p.y * params.width_px);
-#define DECLARE(c, buf) vec4 re##c = vec4(0.0), im##c = vec4(0.0);
+  // This invocation computes OUTPUTS pixels along row y from column x0: each layer value it loads
+  // serves up to OUTPUTS taps. Per output pixel the sum still runs over i = 0..TAPS-1 in order.
+  const int x0 = int(gl_GlobalInvocationID.x) * OUTPUTS, y = int(gl_GlobalInvocationID.y);
+  if (x0 >= params.width_px || y >= params.height_px) return;
+  const uint row = uint(y * params.width_px);
+#define DECLARE(c, buf)                                     \
+  vec4 re##c[OUTPUTS], im##c[OUTPUTS];                      \
+  for (int k = 0; k < OUTPUTS; ++k) re##c[k] = vec4(0.0), im##c[k] = vec4(0.0);
   FOR_EACH_COMPONENT(DECLARE)
-  vec4 box = vec4(0.0);
-  for (int i = 0; i < TAPS; ++i) {
-    const vec4 j = layer[row + uint(clamp(p.x + i - RADIUS, 0, params.width_px - 1))];
+  vec4 box[OUTPUTS];
+  for (int k = 0; k < OUTPUTS; ++k) box[k] = vec4(0.0);
+  for (int s = 0; s < TAPS + OUTPUTS - 1; ++s) {
+    const vec4 j = layer[row + uint(clamp(x0 + s - RADIUS, 0, params.width_px - 1))];
+    for (int k = 0; k < OUTPUTS; ++k) {
+      const int i = s - k;  // tap index for output x0 + k
+      if (i < 0 || i >= TAPS) continue;
 #define ACCUMULATE(c, buf)                     \
   if (c < COMPONENTS) {                        \
     const vec4 t = kernel.taps[c * TAPS + i];  \
-    re##c += TAP_RE * j;                       \
-    im##c += TAP_IM * j;                       \
+    re##c[k] += TAP_RE * j;                    \
+    im##c[k] += TAP_IM * j;                    \
   }
-    FOR_EACH_COMPONENT(ACCUMULATE)
+      FOR_EACH_COMPONENT(ACCUMULATE)
 #if PRECISION == 2
-    box += j;
+      box[k] += j;
 #endif
+    }
   }
-  const uint pixel = index_of(p);
 #if PRECISION == 0
-#define STORE(c, buf)            \
-  if (c < COMPONENTS) {          \
-    buf.d[2u * pixel] = re##c;   \
-    buf.d[2u * pixel + 1u] = im##c; \
+#define STORE(c, buf)                   \
+  if (c < COMPONENTS) {                 \
+    buf.d[2u * pixel] = re##c[k];       \
+    buf.d[2u * pixel + 1u] = im##c[k];  \
   }
 #elif PRECISION == 1
-#define STORE(c, buf)                                                                                 \
-  if (c < COMPONENTS)                                                                                 \
-    buf.d[pixel] = uvec4(packHalf2x16(re##c.rg), packHalf2x16(re##c.ba), packHalf2x16(im##c.rg),      \
-                         packHalf2x16(im##c.ba));
+#define STORE(c, buf)                                                                                    \
+  if (c < COMPONENTS)                                                                                    \
+    buf.d[pixel] = uvec4(packHalf2x16(re##c[k].rg), packHalf2x16(re##c[k].ba), packHalf2x16(im##c[k].rg), \
+                         packHalf2x16(im##c[k].ba));
 #else
   const vec4 m = channel_max();
   const vec4 inv_max = vec4(m.x > 0.0 ? 1.0 / m.x : 0.0, m.y > 0.0 ? 1.0 / m.y : 0.0, m.z > 0.0 ? 1.0 / m.z : 0.0,
                             m.w > 0.0 ? 1.0 / m.w : 0.0);
-  const vec4 b = box * inv_max;
-  box_over_max[pixel] = uvec2(packHalf2x16(b.rg), packHalf2x16(b.ba));
   // As the CPU: nearbyint (round half to even) of clamp(I' / M, 0, 1) * 1023.
-#define STORE(c, buf)                                                                        \
-  if (c < COMPONENTS) {                                                                      \
-    const uvec4 code_re = uvec4(roundEven(clamp(re##c * inv_max, 0.0, 1.0) * UNORM10_MAX));  \
-    const uvec4 code_im = uvec4(roundEven(clamp(im##c * inv_max, 0.0, 1.0) * UNORM10_MAX));  \
-    buf.d[3u * pixel] = pack_unorm10x3(code_re.rgb);                                         \
-    buf.d[3u * pixel + 1u] = pack_unorm10x3(uvec3(code_re.a, code_im.rg));                   \
-    buf.d[3u * pixel + 2u] = pack_unorm10x3(uvec3(code_im.ba, 0u));                          \
+#define STORE(c, buf)                                                                           \
+  if (c < COMPONENTS) {                                                                         \
+    const uvec4 code_re = uvec4(roundEven(clamp(re##c[k] * inv_max, 0.0, 1.0) * UNORM10_MAX));  \
+    const uvec4 code_im = uvec4(roundEven(clamp(im##c[k] * inv_max, 0.0, 1.0) * UNORM10_MAX));  \
+    buf.d[3u * pixel] = pack_unorm10x3(code_re.rgb);                                            \
+    buf.d[3u * pixel + 1u] = pack_unorm10x3(uvec3(code_re.a, code_im.rg));                      \
+    buf.d[3u * pixel + 2u] = pack_unorm10x3(uvec3(code_im.ba, 0u));                             \
   }
 #endif
-  FOR_EACH_COMPONENT(STORE)
+  for (int k = 0; k < OUTPUTS; ++k) {
+    if (x0 + k >= params.width_px) break;
+    const uint pixel = row + uint(x0 + k);
+#if PRECISION == 2
+    const vec4 b = box[k] * inv_max;
+    box_over_max[pixel] = uvec2(packHalf2x16(b.rg), packHalf2x16(b.ba));
+#endif
+    FOR_EACH_COMPONENT(STORE)
+  }
 }

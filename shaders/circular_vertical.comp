@@ -39,44 +39,57 @@ const float MIN_FAR_ALPHA = 1e-4;  // kMinFarAlpha in kernels/circular_separable
 #endif
 
 void main() {
-  const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  if (outside(p)) return;
+  // This invocation computes OUTPUTS pixels down column x from row y0: each H value it loads serves up
+  // to OUTPUTS taps. Per output pixel the sum still runs over j = 0..TAPS-1 in order, as on the CPU.
+  const int x = int(gl_GlobalInvocationID.x), y0 = int(gl_GlobalInvocationID.y) * OUTPUTS;
+  if (x >= params.width_px || y0 >= params.height_px) return;
 #if PRECISION == 2
   const vec4 m = channel_max();
 #endif
-#define DECLARE(c, buf) vec4 acc_re##c = vec4(0.0), acc_im##c = vec4(0.0);
+#define DECLARE(c, buf)                                            \
+  vec4 acc_re##c[OUTPUTS], acc_im##c[OUTPUTS];                     \
+  for (int k = 0; k < OUTPUTS; ++k) acc_re##c[k] = vec4(0.0), acc_im##c[k] = vec4(0.0);
   FOR_EACH_COMPONENT(DECLARE)
-  for (int j = 0; j < TAPS; ++j) {
-    const int sy = clamp(p.y + j - RADIUS, 0, params.height_px - 1);
-    const uint source = uint(sy * params.width_px + p.x);
+  for (int s = 0; s < TAPS + OUTPUTS - 1; ++s) {
+    const int sy = clamp(y0 + s - RADIUS, 0, params.height_px - 1);
+    const uint source = uint(sy * params.width_px + x);
 #if PRECISION == 2
     const uvec2 bw = box_over_max[source];
     const vec4 box = vec4(unpackHalf2x16(bw.x), unpackHalf2x16(bw.y)) * m;
 #endif
-#define ACCUMULATE(c, buf)                            \
-  if (c < COMPONENTS) {                               \
-    const vec2 t = kernel.taps[c * TAPS + j].xy;      \
-    LOAD_COMPLEX(c, buf, source)                      \
-    acc_re##c += t.x * h_re - t.y * h_im;             \
-    acc_im##c += t.x * h_im + t.y * h_re;             \
+#define ACCUMULATE(c, buf)                                 \
+  if (c < COMPONENTS) {                                    \
+    LOAD_COMPLEX(c, buf, source)                           \
+    for (int k = 0; k < OUTPUTS; ++k) {                    \
+      const int j = s - k; /* tap index for output y0 + k */ \
+      if (j >= 0 && j < TAPS) {                            \
+        const vec2 t = kernel.taps[c * TAPS + j].xy;       \
+        acc_re##c[k] += t.x * h_re - t.y * h_im;           \
+        acc_im##c[k] += t.x * h_im + t.y * h_re;           \
+      }                                                    \
+    }                                                      \
   }
     FOR_EACH_COMPONENT(ACCUMULATE)
   }
-  vec4 b = vec4(0.0);
+  for (int k = 0; k < OUTPUTS; ++k) {
+    const int y = y0 + k;
+    if (y >= params.height_px) break;
+    vec4 b = vec4(0.0);
 #define COMBINE(c, buf) \
-  if (c < COMPONENTS) b += kernel.weight[c].x * acc_re##c + kernel.weight[c].y * acc_im##c;
-  FOR_EACH_COMPONENT(COMBINE)
+  if (c < COMPONENTS) b += kernel.weight[c].x * acc_re##c[k] + kernel.weight[c].y * acc_im##c[k];
+    FOR_EACH_COMPONENT(COMBINE)
 
-  const uint i = index_of(p);
-  if (LAYER == 0) {
-    vec3 o = color[i].rgb;
-    const float a = layer[i].a;
-    if (a > 0.0 && b.a > MIN_FAR_ALPHA) o = (1.0 - a) * o + a * b.rgb / b.a;
-    result[i] = vec4(o, 1.0);
-  } else {
-    vec3 o = result[i].rgb;
-    const float alpha = clamp(b.a, 0.0, 1.0);
-    if (alpha > 0.0) o = (1.0 - alpha) * o + b.rgb * (alpha / b.a);
-    result[i] = vec4(o, 1.0);
+    const uint i = uint(y * params.width_px + x);
+    if (LAYER == 0) {
+      vec3 o = color[i].rgb;
+      const float a = layer[i].a;
+      if (a > 0.0 && b.a > MIN_FAR_ALPHA) o = (1.0 - a) * o + a * b.rgb / b.a;
+      result[i] = vec4(o, 1.0);
+    } else {
+      vec3 o = result[i].rgb;
+      const float alpha = clamp(b.a, 0.0, 1.0);
+      if (alpha > 0.0) o = (1.0 - alpha) * o + b.rgb * (alpha / b.a);
+      result[i] = vec4(o, 1.0);
+    }
   }
 }

@@ -26,9 +26,12 @@ void main() {
   const uint h = bracket_half();
   for (int z = 0; z <= params.half_n; ++z) {
     const uint i = bracket_index(y, z);
-    for (int c = 0; c < 3; ++c) {
-      atomicMin(bracket_bits[i + uint(c)], floatBitsToUint(lo[z][c]));
-      atomicMax(bracket_bits[h + i + uint(c)], floatBitsToUint(hi[z][c]));
-    }
+    const uvec3 lo_bits = floatBitsToUint(lo[z]), hi_bits = floatBitsToUint(hi[z]);
+    atomicMin(bracket_bits[i].r, lo_bits.r);
+    atomicMin(bracket_bits[i].g, lo_bits.g);
+    atomicMin(bracket_bits[i].b, lo_bits.b);
+    atomicMax(bracket_bits[h + i].r, hi_bits.r);
+    atomicMax(bracket_bits[h + i].g, hi_bits.g);
+    atomicMax(bracket_bits[h + i].b, hi_bits.b);
   }
 }

@@ -26,21 +26,19 @@ void flag_layers(ivec2 p, out vec3 layer[LAYERS]) {
 }
 
 #ifdef USE_BRACKETS
-// Per (row, layer, channel) i = (y * LAYERS + z) * 3 + c: bits[i] = smallest and bits[half + i] =
-// largest f32 layer value along the row, as float bits (non-negative floats order like their bits,
-// so atomicMin/atomicMax on uint are float min/max). Reset to 0xffffffff / 0 before flag_bracket.comp.
-layout(std430, binding = 2) BRACKET_ACCESS buffer Brackets { uint bracket_bits[]; };
+// Per (row y, layer z), i = y * LAYERS + z: bracket_bits[i].rgb = smallest and bracket_bits[half + i].rgb
+// = largest f32 layer value of each channel along the row, as float bits (non-negative floats order
+// like their bits, so atomicMin/atomicMax on uint are float min/max); .a unused. uvec4 entries so a
+// reader fetches a bracket in two vector loads. Reset to 0xffffffff / 0 before flag_bracket.comp.
+layout(std430, binding = 2) BRACKET_ACCESS buffer Brackets { uvec4 bracket_bits[]; };
 
-uint bracket_index(int y, int z) { return uint((y * LAYERS + z) * 3); }
+uint bracket_index(int y, int z) { return uint(y * LAYERS + z); }
 uint bracket_half() { return uint(bracket_bits.length()) / 2u; }
 
 // (offset, scale) of row y, layer z: offset = min, scale = max - min, per channel.
 void bracket_of(int y, int z, out vec3 offset, out vec3 scale) {
-  const uint i = bracket_index(y, z), h = bracket_half();
-  offset = vec3(uintBitsToFloat(bracket_bits[i]), uintBitsToFloat(bracket_bits[i + 1u]),
-                uintBitsToFloat(bracket_bits[i + 2u]));
-  const vec3 hi = vec3(uintBitsToFloat(bracket_bits[h + i]), uintBitsToFloat(bracket_bits[h + i + 1u]),
-                       uintBitsToFloat(bracket_bits[h + i + 2u]));
-  scale = hi - offset;
+  const uint i = bracket_index(y, z);
+  offset = uintBitsToFloat(bracket_bits[i].rgb);
+  scale = uintBitsToFloat(bracket_bits[bracket_half() + i].rgb) - offset;
 }
 #endif

@@ -9,7 +9,8 @@ layout(constant_id = 0) const int LAYERS = 21;
 layout(binding = 0, LAYER_FORMAT) uniform readonly image3D layers;
 layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
 #if BRACKETED
-layout(std430, binding = 2) readonly buffer Brackets { uint bracket_bits[]; };
+// As in flag_layers.glsl: [y * LAYERS + z].rgb = min bits, [half + y * LAYERS + z].rgb = max bits.
+layout(std430, binding = 2) readonly buffer Brackets { uvec4 bracket_bits[]; };
 #endif
 
 void main() {
@@ -25,13 +26,9 @@ void main() {
     if (sy < 0 || sy >= params.height_px) continue;
     const vec3 q = imageLoad(layers, ivec3(p.x, sy, abs(j))).rgb;
 #if BRACKETED
-    // Same layout as flag_layers.glsl: i = (y * LAYERS + z) * 3 + c; min at i, max at h + i.
-    const uint i = uint((sy * LAYERS + abs(j)) * 3);
-    vec3 offset, scale;
-    for (int c = 0; c < 3; ++c) {
-      offset[c] = uintBitsToFloat(bracket_bits[i + uint(c)]);
-      scale[c] = uintBitsToFloat(bracket_bits[h + i + uint(c)]) - offset[c];
-    }
+    const uint i = uint(sy * LAYERS + abs(j));
+    const vec3 offset = uintBitsToFloat(bracket_bits[i].rgb);
+    const vec3 scale = uintBitsToFloat(bracket_bits[h + i].rgb) - offset;
     sum += offset + scale * q;
 #else
     sum += q;

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <ostream>
 #include <string>
 
 #include "circular_separable.hpp"
@@ -123,9 +124,12 @@ struct Case {
   int components, near_components;
   IntermediatePrecision precision;
 };
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.components << " far / " << c.near_components << " near components, " << to_string(c.precision);
+}
 
 void check_gpu_against_cpu(const Case& tc, const char* scene_name) {
-  const Scene s = make_scene(scene_name, 64, 48);
+  const Scene s = make_scene(scene_name, 63, 46);  // not multiples of 4 or 8: partial blocks and workgroups
   const std::string method = "circular" + std::to_string(tc.components);
   gpu::FilterOptions options{{7, 2}, to_string(tc.precision)};  // max radius 6 px
   options.near_components = tc.near_components;
@@ -225,6 +229,25 @@ INSTANTIATE_TEST_SUITE_P(ComponentsAndPrecisions, GpuCircular, ::testing::Values
   return "circular" + std::to_string(info.param.components) + "_near" + std::to_string(info.param.near_components) +
          "_" + to_string(info.param.precision);
 });
+
+// intermediate_bytes(): the near and far RGBA f32 layers (32 B/px) plus one convolution's
+// intermediates for the larger component count, as circular_cost counts them for 4 channels (the
+// near and far convolutions run one after the other and share them), plus the kernel taps and the
+// 32 B of channel maxima; the driver may round each allocation up a little.
+TEST(GpuCircularMemory, IntermediateBytesMatchCircularCost) {
+  const Scene s = make_scene("hoops", 63, 46);
+  for (IntermediatePrecision p : {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
+    gpu::FilterOptions options{{9, 2}, to_string(p)};
+    options.near_components = 1;
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, s.lens, options.pattern);
+    const auto filter = find_filter("circular3").make_gpu(frame, options);
+    const int kernel_radius = make_circular_kernel_for_disc(3, options.pattern.max_radius_px()).radius_px;
+    const std::uint64_t pixels = 63 * 46;
+    const std::uint64_t expected = pixels * (32 + circular_cost(3, kernel_radius, p, 4).intermediate_bytes_per_pixel);
+    EXPECT_GE(filter->intermediate_bytes(), expected) << to_string(p);
+    EXPECT_LE(filter->intermediate_bytes(), expected + 16384) << to_string(p);
+  }
+}
 
 // Radius where the output along the four axis directions first drops below half the plateau
 // (mean over r <= disc / 2), linearly interpolated between pixels, averaged over the directions.

@@ -84,6 +84,44 @@ TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
   }
 }
 
+// A pinhole (every radius 0) must give back the input exactly on the device, for every method
+// that gathers: each pixel keeps colour / area with area 1.
+TEST(GpuPipeline, PinholeLensIsTheIdentity) {
+  Scene s = make_scene("pillars", 64, 48);
+  s.lens.f_stop = 1e12;
+  for (const char* method : {"naive", "flag"})
+    for (const char* precision : {"f32", "f16"}) {
+      if (std::string(method) == "naive" && std::string(precision) == "f16") continue;
+      const Image out = run_gpu(context(), find_filter(method), s.color, s.depth_m, s.lens, {{9, 2}, precision});
+      for (std::size_t p = 0; p < out.pixel_count(); ++p)
+        for (int c = 0; c < 3; ++c) {
+          const float in = s.color.pixels[p * 3 + c];
+          // f16 layers store the colour itself once: one rounding (2^-10 relative allows either mode).
+          const float bound = std::string(precision) == "f16" ? std::ldexp(1.0f, -10) * std::abs(in) : 0.0f;
+          ASSERT_LE(std::abs(out.pixels[p * 3 + c] - in), bound) << method << " " << precision << " pixel " << p;
+        }
+    }
+}
+
+// Energy: with a black border wider than the largest radius, the output sums to the input.
+TEST(GpuPipeline, EnergyIsConservedAwayFromBorders) {
+  Scene s = make_scene("hoops", 96, 64);
+  const GatherPattern pattern{9, 2};
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 96; ++x)
+      if (x < 9 || y < 9 || x >= 87 || y >= 55)
+        for (int c = 0; c < 3; ++c) s.color.px(x, y)[c] = 0.0f;
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
+  double in = 0;
+  for (float v : s.color.pixels) in += v;
+  for (const char* method : {"naive", "flag"}) {
+    const Image out = run_gpu(context(), find_filter(method), s.color, s.depth_m, lens, {pattern, "f32"});
+    double total = 0;
+    for (float v : out.pixels) total += v;
+    EXPECT_NEAR(total / in, 1.0, 1e-5) << method;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, GpuMatchesCpu,
                          ::testing::Values(Case{"hoops", 9, 2}, Case{"pillars", 7, 3}, Case{"points", 11, 1},
                                            Case{"hoops", 1, 2}),

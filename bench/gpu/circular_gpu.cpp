@@ -12,7 +12,10 @@
 // Both kernels are make_circular_kernel_for_disc(components, max radius): the disc radius is the
 // pattern's max radius k (N - 1) / 2. Taps, weights and the bracketing constants O, S are computed on
 // the CPU exactly as the reference does and uploaded once; kernel radius and component count are
-// specialization constants.
+// specialization constants. Each invocation of a horizontal (vertical) pass computes 4 adjacent
+// pixels of a row (column), so every value it loads serves up to 4 taps; each output still sums its
+// taps in the CPU's order. The subgroup reduction needs VK_SUBGROUP_FEATURE_ARITHMETIC_BIT in compute
+// (lavapipe and desktop drivers have it).
 #include <algorithm>
 #include <cstdint>
 #include <span>
@@ -111,7 +114,14 @@ int checked_max_radius(const FilterOptions& options) {
   return static_cast<int>(r);
 }
 
-std::vector<std::int32_t> spec(const CircularKernel& k, int layer) { return {k.components, k.radius_px, layer}; }
+// Output pixels per invocation along each pass (spec constant OUTPUTS): every loaded value serves
+// that many taps. lavapipe pays far more per storage-buffer load than per multiply-add.
+// 4 and 4 measured best on lavapipe at 800x600 (vs 1, 2, 3, 8): 1.5-2.5x faster passes than 1 and 1.
+constexpr int kHorizontalOutputs = 4, kVerticalOutputs = 4;
+
+std::vector<std::int32_t> spec(const CircularKernel& k, int layer, int outputs) {
+  return {k.components, k.radius_px, layer, outputs};
+}
 
 std::vector<VkDescriptorType> buffers(std::uint32_t n) { return std::vector<VkDescriptorType>(n, kBuffer); }
 
@@ -135,13 +145,13 @@ class Circular final : public GpuFilter {
         layers_(frame.ctx, circular_layers_spv, buffers(6), sizeof(PassParams),
                 {precision == IntermediatePrecision::bracketed10 ? 1 : 0}),
         far_horizontal_(frame.ctx, horizontal_spirv(precision), buffers(kConvolutionBindings), sizeof(PassParams),
-                        spec(far_kernel_, kFarLayer)),
+                        spec(far_kernel_, kFarLayer, kHorizontalOutputs)),
         far_vertical_(frame.ctx, vertical_spirv(precision), buffers(kVerticalBindings), sizeof(PassParams),
-                      spec(far_kernel_, kFarLayer)),
+                      spec(far_kernel_, kFarLayer, kVerticalOutputs)),
         near_horizontal_(frame.ctx, horizontal_spirv(precision), buffers(kConvolutionBindings), sizeof(PassParams),
-                         spec(near_kernel_, kNearLayer)),
+                         spec(near_kernel_, kNearLayer, kHorizontalOutputs)),
         near_vertical_(frame.ctx, vertical_spirv(precision), buffers(kVerticalBindings), sizeof(PassParams),
-                       spec(near_kernel_, kNearLayer)) {
+                       spec(near_kernel_, kNearLayer, kVerticalOutputs)) {
     // Near and far run one after the other, so they share the component buffers.
     const int components = std::max(far_components, near_components);
     for (int c = 0; c < components; ++c)
@@ -175,13 +185,13 @@ class Circular final : public GpuFilter {
     const std::uint32_t w = frame_.width(), h = frame_.height();
     layers_.dispatch(cmd, params, w, h);
     timer.end_pass(cmd, "layers");
-    far_horizontal_.dispatch(cmd, params, w, h);
+    far_horizontal_.dispatch(cmd, params, horizontal_invocations(w), h);
     timer.end_pass(cmd, "far_horizontal");
-    far_vertical_.dispatch(cmd, params, w, h);
+    far_vertical_.dispatch(cmd, params, w, vertical_invocations(h));
     timer.end_pass(cmd, "far_vertical");
-    near_horizontal_.dispatch(cmd, params, w, h);
+    near_horizontal_.dispatch(cmd, params, horizontal_invocations(w), h);
     timer.end_pass(cmd, "near_horizontal");
-    near_vertical_.dispatch(cmd, params, w, h);
+    near_vertical_.dispatch(cmd, params, w, vertical_invocations(h));
     timer.end_pass(cmd, "near_vertical");
   }
 
@@ -194,6 +204,10 @@ class Circular final : public GpuFilter {
   }
 
  private:
+  static std::uint32_t horizontal_invocations(std::uint32_t w) {
+    return (w + kHorizontalOutputs - 1) / kHorizontalOutputs;
+  }
+  static std::uint32_t vertical_invocations(std::uint32_t h) { return (h + kVerticalOutputs - 1) / kVerticalOutputs; }
   VkDeviceSize pixels() const { return static_cast<VkDeviceSize>(frame_.width()) * frame_.height(); }
 
   vk::Buffer upload_kernel(const CircularKernel& k) {

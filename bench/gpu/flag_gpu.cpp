@@ -6,7 +6,7 @@
 // The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
 // without the 3D-buffer writes, reducing each (row, layer, channel) to its min and max with
 // atomicMin/atomicMax on the float bits (shaders/flag_bracket.comp) into a small storage buffer
-// (2 x rows x layers x 3 uints, reset by vkCmdFillBuffer in the same pass); the horizontal pass
+// (2 x rows x layers uvec4, reset by vkCmdFillBuffer in the same pass); the horizontal pass
 // stores (v - min) / (max - min) in the unorm format and the vertical pass reads min + (max - min) q.
 //
 // FilterOptions::buffer_scale s > 1 (kernels/flag_reduced.hpp): "downsample" packs the full-res
@@ -49,7 +49,7 @@ VkFormat layer_format(LayerPrecision precision) {
 }
 
 std::uint64_t flag_bracket_buffer_bytes(std::uint32_t rows, std::uint32_t layers) {
-  return 2ull * rows * layers * 3 * sizeof(std::uint32_t);
+  return 2ull * rows * layers * 4 * sizeof(std::uint32_t);  // min and max blocks of uvec4 (rgb, unused)
 }
 
 namespace {

@@ -13,7 +13,7 @@ std::unique_ptr<GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& o
 std::unique_ptr<GpuFilter> make_circular_gpu(GpuFrame& frame, const FilterOptions& options, int components);
 
 VkFormat layer_format(LayerPrecision precision);  // FLAG's 3D buffer format
-// Bytes of the bracketed precisions' min/max buffer: 2 x rows x layers x 3 uints (flag_gpu.cpp).
+// Bytes of the bracketed precisions' min/max buffer: 2 x rows x layers uvec4 (flag_gpu.cpp).
 std::uint64_t flag_bracket_buffer_bytes(std::uint32_t rows, std::uint32_t layers);
 
 }  // namespace bokeh::gpu

@@ -1,0 +1,174 @@
+#!/usr/bin/python3
+"""Plot results/buffers.json: FLAG's 3D buffer, memory against error, per resolution.
+
+usage: plot_buffers.py BUFFERS_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
+
+Top row, one panel per resolution: RMSE against the full-resolution f32 FLAG result vs the 3D
+buffer's size (driver's MiB, log-log), one marker per precision, one colour per buffer scale,
+filled for the largest gather size N and hollow for smaller ones; dotted verticals are the memory
+budgets (64 and 16 MiB by default). Exact results (RMSE 0) sit on the bottom edge, marked "exact".
+Configurations skipped for the memory budget appear as grey x's on the bottom edge at their size.
+Bottom left: RMSE vs gather size N per precision at full scale (solid), at the largest resolution
+with data: which precision fails first as radii grow; grey dashed lines are f32 at the reduced
+scales, the error that reduced resolution alone costs (it dwarfs every precision's).
+Bottom middle: RMSE against the exact scatter (energy sum) of the same radii vs buffer MiB, with
+full-res f32 FLAG's own error against it as horizontal lines: context for the top row, since
+full-res FLAG carries the pattern of its k-px sample grid and the reduced pipelines do not.
+Bottom right: GPU time of the FLAG passes (downsample, bracket, horizontal, vertical, upsample: the
+frame without the CoC pass, which every configuration shares) vs buffer MiB at that resolution.
+"""
+import json
+import math
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+MARKERS = {"f32": "o", "f16": "s", "r11g11b10f": "^", "unorm10_bracketed": "D", "unorm16_bracketed": "P"}
+SCALE_COLOURS = {1: "#1f77b4", 2: "#ff7f0e", 4: "#2ca02c"}
+PRECISION_COLOURS = {"f32": "#1f77b4", "f16": "#d62728", "r11g11b10f": "#9467bd",
+                     "unorm10_bracketed": "#2ca02c", "unorm16_bracketed": "#ff7f0e"}
+
+
+def rmse_floor(points):
+    positive = [p["error"]["rmse"] for p in points if p["error"]["rmse"] > 0]
+    return min(positive) / 10 if positive else 1e-8
+
+
+def res_key(p):
+    return (p["width_px"], p["height_px"])
+
+
+def main(path, prefix):
+    with open(path) as f:
+        doc = json.load(f)
+    ctx, cfg = doc["context"], doc["config"]
+    points, skipped = doc["points"], doc.get("skipped", [])
+    resolutions = sorted({res_key(p) for p in points} | {res_key(s) for s in skipped}, key=lambda r: r[0] * r[1])
+    if not resolutions:
+        sys.exit("no points to plot")
+    floor = rmse_floor(points)
+    budgets = cfg.get("budget_lines_mib", [64, 16])
+    largest_n = max(cfg["sizes"])
+
+    fig = plt.figure(figsize=(max(15, 4.6 * len(resolutions)), 9.8), constrained_layout=True)
+    outer = fig.add_gridspec(2, 1)
+    top, bottom = outer[0].subgridspec(1, len(resolutions)), outer[1].subgridspec(1, 3)
+    for i, res in enumerate(resolutions):
+        ax = fig.add_subplot(top[0, i])
+        for p in (p for p in points if res_key(p) == res):
+            err = p["error"]["rmse"]
+            colour = SCALE_COLOURS.get(p["scale"], "k")
+            filled = p["N"] == largest_n
+            ax.scatter(p["buffer"]["allocated_mib"], err if err > 0 else floor, marker=MARKERS.get(p["precision"], "o"),
+                       s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2, zorder=3)
+            if err == 0:
+                ax.annotate("exact", (p["buffer"]["allocated_mib"], floor), fontsize=7, xytext=(3, 3),
+                            textcoords="offset points")
+        for s in (s for s in skipped if res_key(s) == res and "buffer" in s):
+            ax.scatter(s["buffer"]["allocated_mib"], floor, marker="x", color="0.6", s=30, zorder=2)
+        for mib in budgets:
+            ax.axvline(mib, color="0.3", ls=":", lw=1)
+            ax.annotate(f"{mib:g} MiB", (mib, 1), xycoords=("data", "axes fraction"), fontsize=7, rotation=90,
+                        va="top", ha="right")
+        if cfg.get("max_buffer_mb"):
+            ax.axvline(cfg["max_buffer_mb"], color="#d62728", ls="--", lw=0.8)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(f"{res[0]}x{res[1]}: error vs 3D-buffer size", fontsize=10)
+        ax.set_xlabel("3D buffer (MiB, driver's allocation)")
+        if i == 0:
+            ax.set_ylabel("RMSE vs full-res f32 FLAG (linear RGB)")
+        ax.grid(True, which="both", alpha=0.25)
+    # Legend: markers = precision, colours = scale, fill = N.
+    handles = [plt.Line2D([], [], ls="", marker=m, color="0.2", label=name) for name, m in MARKERS.items()
+               if name in cfg["precisions"]]
+    handles += [plt.Line2D([], [], ls="", marker="o", color=c, label=f"scale 1/{s}") for s, c in SCALE_COLOURS.items()
+                if s in cfg["scales"]]
+    handles += [plt.Line2D([], [], ls="", marker="o", markerfacecolor="none", color="0.2", label="N < " + str(largest_n)),
+                plt.Line2D([], [], ls="", marker="x", color="0.6", label="skipped (over --max-buffer-mb)")]
+    fig.axes[0].legend(handles=handles, fontsize=7, loc="lower left")
+
+    # Bottom: at the largest resolution with measured points.
+    with_data = [r for r in resolutions if any(res_key(p) == r for p in points)]
+    big = with_data[-1] if with_data else resolutions[-1]
+    ax = fig.add_subplot(bottom[0, 0])
+    def series(precision, scale):
+        return sorted((p for p in points if res_key(p) == big and p["precision"] == precision and p["scale"] == scale),
+                      key=lambda p: p["N"])
+    for precision in cfg["precisions"]:
+        pts = series(precision, 1)
+        if pts:
+            ax.plot([p["N"] for p in pts], [max(p["error"]["rmse"], floor) for p in pts], ls="-",
+                    marker=MARKERS.get(precision, "o"), color=PRECISION_COLOURS.get(precision), label=f"{precision} 1/1")
+    for scale, grey in ((2, "0.45"), (4, "0.7")):
+        pts = series("f32", scale)
+        if pts:
+            ax.plot([p["N"] for p in pts], [max(p["error"]["rmse"], floor) for p in pts], ls="--", marker=".",
+                    color=grey, label=f"f32 1/{scale} (resolution alone)")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"gather size N (k = {cfg['spacing_px']} px; max CoC radius k(N-1)/2)")
+    ax.set_ylabel("RMSE vs full-res f32 FLAG")
+    ax.set_title(f"{big[0]}x{big[1]}: error vs gather size (which precision fails first as radii grow)", fontsize=10)
+    ax.grid(True, which="both", alpha=0.25)
+    ax.legend(fontsize=7, ncol=2)
+
+    # Against the exact scatter, for context: full-res FLAG's own error (its k-px sample grid) as a line.
+    ax = fig.add_subplot(bottom[0, 1])
+    exact_points = [p for p in points if res_key(p) == big and p.get("error_vs_exact")]
+    for p in exact_points:
+        colour = SCALE_COLOURS.get(p["scale"], "k")
+        filled = p["N"] == largest_n
+        ax.scatter(p["buffer"]["allocated_mib"], p["error_vs_exact"]["rmse"], marker=MARKERS.get(p["precision"], "o"),
+                   s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
+    for r in doc.get("references", []):
+        if (r["width_px"], r["height_px"]) == big and r.get("flag_f32_vs_exact"):
+            ax.axhline(r["flag_f32_vs_exact"]["rmse"], color="0.3", ls="--" if r["N"] == largest_n else ":", lw=1,
+                       label=f"full-res f32 FLAG, N = {r['N']}")
+    for mib in budgets:
+        ax.axvline(mib, color="0.3", ls=":", lw=1)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("3D buffer (MiB, driver's allocation)")
+    ax.set_ylabel("RMSE vs exact scatter (energy sum)")
+    ax.set_title(f"{big[0]}x{big[1]}: error vs the exact scatter, for context", fontsize=10)
+    ax.grid(True, which="both", alpha=0.25)
+    if exact_points:
+        ax.legend(fontsize=7)
+    else:
+        ax.text(0.5, 0.5, "no exact-scatter errors (--no-exact)", transform=ax.transAxes, ha="center")
+
+    ax = fig.add_subplot(bottom[0, 2])
+    for p in (p for p in points if res_key(p) == big):
+        colour = SCALE_COLOURS.get(p["scale"], "k")
+        filled = p["N"] == largest_n
+        ax.scatter(p["buffer"]["allocated_mib"], p.get("flag_passes_ms", p["frame_ms"]["median"]),
+                   marker=MARKERS.get(p["precision"], "o"),
+                   s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
+    for mib in budgets:
+        ax.axvline(mib, color="0.3", ls=":", lw=1)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("3D buffer (MiB, driver's allocation)")
+    ax.set_ylabel("GPU time of the FLAG passes (ms, medians; frame minus CoC)")
+    ax.set_title(f"{big[0]}x{big[1]}: time vs buffer size (markers as above)", fontsize=10)
+    ax.grid(True, which="both", alpha=0.25)
+
+    device = ctx.get("device") or {}
+    fig.suptitle(
+        f"FLAG 3D buffer precision x scale, {cfg['scene']}, N {cfg['sizes']}, k = {cfg['spacing_px']}\n"
+        f"{device.get('name', 'no device')} ({device.get('driver_info', '')}), "
+        f"LP_NUM_THREADS={ctx['lp_num_threads']}, {ctx['date_utc']}, "
+        f"commit {ctx['git_commit']}" + ("" if doc.get("status") == "complete" else f"  [{doc.get('status')}]"),
+        fontsize=9)
+    for ext in ("png", "svg"):
+        fig.savefig(f"{prefix}.{ext}", dpi=110)
+    print(f"wrote {prefix}.png and {prefix}.svg")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    main(sys.argv[1], sys.argv[2])
