@@ -25,6 +25,7 @@ struct RenderOptions {
   int width_px = 800, height_px = 600, size_n = 41, spacing_px = 2;
   std::optional<double> fit_max_coc_px;
   int near_components = 0;  // circular filters: near-field components (0: the method's)
+  int buffer_scale = 1;
   bool compare = false;
   std::string reference_cache = "build/reference-cache";
 };
@@ -59,6 +60,7 @@ void render(const RenderOptions& o) {
   const FilterRegistration& filter = find_filter(o.method);
   gpu::FilterOptions options{{o.size_n, o.spacing_px}, o.precision.empty() ? filter.precisions.front() : o.precision};
   options.near_components = o.near_components;
+  options.buffer_scale = o.buffer_scale;
   validate(options.pattern);
   if (o.fit_max_coc_px) scene.lens = with_max_coc_radius(scene.lens, scene.depth_m, *o.fit_max_coc_px);
 
@@ -113,6 +115,8 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--near-components", o->near_components,
                   "Circular filters: near-field components (default: the method's N; circular2 with 1 is Garcia's)")
       ->check(CLI::Range(1, 6));
+  cmd->add_option("--buffer-scale", o->buffer_scale, "FLAG: 3D buffer at 1/1, 1/2 or 1/4 resolution")
+      ->check(CLI::IsMember({1, 2, 4}));
   cmd->add_option("--backend", o->backend, "gpu (Vulkan) or cpu (reference)")->check(CLI::IsMember({"gpu", "cpu"}));
   cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--out", o->out_path, "Output image: .exr (linear) or .png (tone-mapped)");

@@ -74,10 +74,13 @@ void tradeoff(TradeoffOptions o) {
   for (const auto& name : o.methods) {
     const FilterRegistration& filter = find_filter(name);
     for (const auto& precision : filter.precisions)
-      for (const auto& pattern : patterns) {
-        grid.push_back({&filter, {pattern, precision}});
-        if (!filter.samples_pattern) break;
-      }
+      for (int scale : filter.buffer_scales)
+        for (const auto& pattern : patterns) {
+          gpu::FilterOptions options{pattern, precision};
+          options.buffer_scale = scale;
+          grid.push_back({&filter, options});
+          if (!filter.samples_pattern) break;
+        }
   }
 
   fmt::print("tradeoff: {} {}x{}, max CoC {} px, {} configurations on {}\n", o.scene, o.width_px, o.height_px,
@@ -107,8 +110,10 @@ void tradeoff(TradeoffOptions o) {
 
   for (std::size_t i = 0; i < grid.size() && !Sweep::interrupted(); ++i) {
     const Config& c = grid[i];
-    const std::string id = fmt::format("{}/{}/N:{}/k:{}", c.filter->name, c.options.precision, c.options.pattern.size_n,
-                                       c.options.pattern.spacing_px);
+    const std::string id =
+        fmt::format("{}/{}{}/N:{}/k:{}", c.filter->name, c.options.precision,
+                    c.options.buffer_scale > 1 ? fmt::format("/scale:1-{}", c.options.buffer_scale) : "",
+                    c.options.pattern.size_n, c.options.pattern.spacing_px);
     try {
       Image output;
       const PointStats stats = measure_method(*sweep, "tradeoff/" + o.backend + "/" + id, ctx ? &*ctx : nullptr,
@@ -118,6 +123,7 @@ void tradeoff(TradeoffOptions o) {
       configs.push_back({{"id", id},
                          {"method", c.filter->name},
                          {"precision", c.options.precision},
+                         {"buffer_scale", c.options.buffer_scale},
                          {"N", c.options.pattern.size_n},
                          {"k", c.options.pattern.spacing_px},
                          {"max_radius_px", c.options.pattern.max_radius_px()},

@@ -1,6 +1,10 @@
 #include "filters.hpp"
 
+#include <algorithm>
 #include <stdexcept>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <string>
 
 #include "circular_separable.hpp"
@@ -57,7 +61,7 @@ const std::vector<FilterRegistration>& registered_filters() {
                                       in.threads);
            return flag_blur(in.packed, in.options.pattern, precision, in.threads);
          },
-         gpu::make_flag_gpu},
+         gpu::make_flag_gpu, /*samples_pattern=*/true, /*buffer_scales=*/{1, 2, 4}},
     };
     for (int n = 1; n <= kMaxCircularComponents; ++n) all.push_back(circular_registration(n));
     return all;
@@ -74,14 +78,15 @@ const FilterRegistration& find_filter(const std::string& name) {
   throw std::invalid_argument("unknown method '" + name + "' (known: " + known + ")");
 }
 
-void check_precision(const FilterRegistration& filter, const std::string& precision) {
-  std::string known;
-  for (const auto& p : filter.precisions) {
-    if (p == precision) return;
-    known += (known.empty() ? "" : ", ") + p;
-  }
-  throw std::invalid_argument("method '" + filter.name + "' does not store intermediates as '" + precision +
-                              "' (it accepts: " + known + ")");
+void check_options(const FilterRegistration& filter, const gpu::FilterOptions& options) {
+  const auto& precisions = filter.precisions;
+  if (std::find(precisions.begin(), precisions.end(), options.precision) == precisions.end())
+    throw std::invalid_argument(fmt::format("method '{}' does not store intermediates as '{}' (it accepts: {})",
+                                            filter.name, options.precision, fmt::join(precisions, ", ")));
+  const auto& scales = filter.buffer_scales;
+  if (std::find(scales.begin(), scales.end(), options.buffer_scale) == scales.end())
+    throw std::invalid_argument(fmt::format("method '{}' has no buffer scale {} (it accepts: {})", filter.name,
+                                            options.buffer_scale, fmt::join(scales, ", ")));
 }
 
 }  // namespace bokeh

@@ -32,12 +32,13 @@ struct FilterRegistration {
   // Whether the gather pattern's N and k shape the result; false for fixed kernels that only take
   // the pattern's max radius (sweeps then skip grids that would repeat the same configuration).
   bool samples_pattern = true;
+  std::vector<int> buffer_scales = {1};  // accepted FilterOptions::buffer_scale values
 };
 
 const std::vector<FilterRegistration>& registered_filters();
 // Throws std::invalid_argument listing the valid names.
 const FilterRegistration& find_filter(const std::string& name);
-// Throws std::invalid_argument unless `filter` accepts `precision`.
-void check_precision(const FilterRegistration& filter, const std::string& precision);
+// Throws std::invalid_argument unless `filter` accepts the options' precision and buffer scale.
+void check_options(const FilterRegistration& filter, const gpu::FilterOptions& options);
 
 }  // namespace bokeh

@@ -14,7 +14,7 @@ CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens
 Image run_cpu(const FilterRegistration& filter, const Image& color, const Image& depth_m, const Lens& lens,
               const gpu::FilterOptions& options, int threads) {
   validate(options.pattern);
-  check_precision(filter, options.precision);
+  check_options(filter, options);
   const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern);
   return filter.cpu_reference({color, depth_m, lens, coc.radius_px, coc.packed, options, threads});
 }
@@ -22,7 +22,7 @@ Image run_cpu(const FilterRegistration& filter, const Image& color, const Image&
 Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& color, const Image& depth_m,
               const Lens& lens, const gpu::FilterOptions& options, std::vector<vk::PassTime>* pass_times) {
   validate(options.pattern);
-  check_precision(filter, options.precision);
+  check_options(filter, options);
   coc_radius_image(depth_m, lens, options.pattern.max_radius_px());  // validates depth and lens with clear errors
   gpu::GpuFrame frame(ctx, color, depth_m, lens, options.pattern);
   auto gpu_filter = filter.make_gpu(frame, options);
@@ -36,7 +36,7 @@ Image run_gpu(vk::Context& ctx, const FilterRegistration& filter, const Image& c
 PointStats measure_method(Sweep& sweep, const std::string& name, vk::Context* ctx, const FilterRegistration& filter,
                           const std::string& backend, const Scene& scene, const Lens& lens,
                           const gpu::FilterOptions& options, int cpu_threads, Image* output) {
-  check_precision(filter, options.precision);
+  check_options(filter, options);
   if (backend == "gpu") {
     if (!ctx) throw std::invalid_argument("gpu backend without a Vulkan context");
     gpu::GpuFrame frame(*ctx, scene.color, scene.depth_m, lens, options.pattern);

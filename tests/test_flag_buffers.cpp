@@ -83,8 +83,18 @@ LayerErrors layer_errors(const FlagLayers& exact, const FlagLayers& stored) {
 TEST(FlagPrecision, NamesRoundTripAndTheRegistryAcceptsEveryOne) {
   for (LayerPrecision p : all_layer_precisions()) {
     EXPECT_EQ(layer_precision_from_string(to_string(p)), p);
-    EXPECT_NO_THROW(check_precision(find_filter("flag"), to_string(p)));
+    for (int scale : {1, 2, 4}) {
+      gpu::FilterOptions options{{9, 2}, to_string(p)};
+      options.buffer_scale = scale;
+      EXPECT_NO_THROW(check_options(find_filter("flag"), options));
+    }
   }
+  gpu::FilterOptions bad_scale{{9, 2}, "f16"};
+  bad_scale.buffer_scale = 3;
+  EXPECT_THROW(check_options(find_filter("flag"), bad_scale), std::invalid_argument);
+  gpu::FilterOptions naive_half{{9, 2}, "f32"};
+  naive_half.buffer_scale = 2;
+  EXPECT_THROW(check_options(find_filter("naive"), naive_half), std::invalid_argument);  // only FLAG has a 3D buffer
   EXPECT_EQ(bytes_per_texel(LayerPrecision::r11g11b10f), 4);
   EXPECT_EQ(bytes_per_texel(LayerPrecision::unorm10_bracketed), 4);
   EXPECT_EQ(bytes_per_texel(LayerPrecision::unorm16_bracketed), 8);
