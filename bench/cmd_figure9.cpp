@@ -163,7 +163,7 @@ void figure9(Figure9Options o) {
               {{"N", n},
                {"k", o.spacing_px},
                {"max_radius_px", options.pattern.max_radius_px()},
-               {"samples_per_pixel", method == "naive" ? options.pattern.samples_per_pixel() : 2L * n},
+               {"samples_per_pixel", filter.samples_per_pixel(options)},
                {"f_stop", lens.f_stop},
                {"frame_ms", distribution_json(stats.frame_ms)},
                {"pass_ms", stats.pass_ms},

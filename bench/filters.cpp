@@ -40,6 +40,14 @@ FilterRegistration circular_registration(int components) {
           [components](gpu::GpuFrame& frame, const gpu::FilterOptions& options) {
             return gpu::make_circular_gpu(frame, options, components);
           },
+          // Near and far layers, each a horizontal and a vertical pass over C complex taps.
+          [components](const gpu::FilterOptions& o) {
+            const int radius = std::max(1, static_cast<int>(o.pattern.max_radius_px()));
+            const int near = o.near_components > 0 ? o.near_components : components;
+            return static_cast<double>(
+                circular_cost(components, radius, IntermediatePrecision::f32).taps_per_pixel +
+                circular_cost(near, radius, IntermediatePrecision::f32).taps_per_pixel);
+          },
           /*samples_pattern=*/false};
 }
 
@@ -50,7 +58,8 @@ const std::vector<FilterRegistration>& registered_filters() {
     std::vector<FilterRegistration> all = {
         {"naive", "naive quadratic gather, N x N samples at spacing k (FLAG paper 3.1)", {"f32"},
          [](const CpuFilterInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); },
-         gpu::make_naive_gpu},
+         gpu::make_naive_gpu,
+         [](const gpu::FilterOptions& o) { return static_cast<double>(o.pattern.samples_per_pixel()); }},
         {"flag", "FLAG: horizontal pass into a ceil(N/2)-layer 3D buffer, vertical pass (FLAG paper 3.2)",
          {"f16", "f32", "r11g11b10f", "unorm10_bracketed", "unorm16_bracketed"},
          [](const CpuFilterInput& in) {
@@ -61,7 +70,13 @@ const std::vector<FilterRegistration>& registered_filters() {
                                       in.threads);
            return flag_blur(in.packed, in.options.pattern, precision, in.threads);
          },
-         gpu::make_flag_gpu, /*samples_pattern=*/true, /*buffer_scales=*/{1, 2, 4}},
+         gpu::make_flag_gpu,
+         // N row samples + N layer reads, at 1/s resolution with the reduced pattern: per full-res pixel.
+         [](const gpu::FilterOptions& o) {
+           const GatherPattern p = reduced_pattern(o.pattern, o.buffer_scale);
+           return 2.0 * p.size_n / (o.buffer_scale * o.buffer_scale);
+         },
+         /*samples_pattern=*/true, /*buffer_scales=*/{1, 2, 4}},
     };
     for (int n = 1; n <= kMaxCircularComponents; ++n) all.push_back(circular_registration(n));
     return all;

@@ -29,6 +29,8 @@ struct FilterRegistration {
   std::vector<std::string> precisions;  // accepted FilterOptions::precision values, default first
   std::function<Image(const CpuFilterInput&)> cpu_reference;
   std::function<std::unique_ptr<gpu::GpuFilter>(gpu::GpuFrame&, const gpu::FilterOptions&)> make_gpu;
+  // Input samples (taps) one output pixel costs, over all passes: the cost axis of Figure 9.
+  std::function<double(const gpu::FilterOptions&)> samples_per_pixel;
   // Whether the gather pattern's N and k shape the result; false for fixed kernels that only take
   // the pattern's max radius (sweeps then skip grids that would repeat the same configuration).
   bool samples_pattern = true;

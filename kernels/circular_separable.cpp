@@ -17,14 +17,9 @@ constexpr float kMinFarAlpha = 1e-4f;
 
 float round_half(float v) { return static_cast<float>(Imath::half(v)); }
 
-// Garcia's bracketing of one real 1D kernel G: G' = (G - O) / S.
-struct BracketedKernel {
-  std::vector<float> taps;  // G', >= 0, sums to 1
-  float offset = 0.0f;      // O = min G
-  float scale = 0.0f;       // S = sum (G - O)
-};
+}  // namespace
 
-BracketedKernel bracket(const std::vector<float>& g) {
+BracketedKernel bracket_kernel(const std::vector<float>& g) {
   BracketedKernel b;
   b.offset = *std::min_element(g.begin(), g.end());
   double s = 0.0;
@@ -33,6 +28,8 @@ BracketedKernel bracket(const std::vector<float>& g) {
   for (float v : g) b.taps.push_back(static_cast<float>((v - b.offset) / s));
   return b;
 }
+
+namespace {
 
 // The horizontal pass output in the form the vertical pass reads it back.
 struct Intermediate {
@@ -79,8 +76,8 @@ Intermediate horizontal_pass(const Image& img, const CircularKernel& k, Intermed
     for (const auto& taps : k.taps) {
       std::vector<float> re, im;
       for (std::complex<float> t : taps) re.push_back(t.real()), im.push_back(t.imag());
-      out.real.push_back(bracket(re));
-      out.imag.push_back(bracket(im));
+      out.real.push_back(bracket_kernel(re));
+      out.imag.push_back(bracket_kernel(im));
     }
     out.box_over_max.assign(img.pixels.size(), 0.0f);
   }

@@ -3,6 +3,7 @@
 // writes, per component, the complex response of every channel; a vertical pass convolves those with
 // the same complex taps and combines them with the weights A, B. Image borders clamp to the edge.
 #include <string>
+#include <vector>
 
 #include "circular_coefficients.hpp"
 #include "image.hpp"
@@ -18,6 +19,14 @@ namespace bokeh {
 //     and is stored as 10-bit unorm of I' / M. The box sum sum(J) over the same window goes to one
 //     separate target (f16, of sum(J) / M); the vertical pass recovers I = S I' + O sum(J).
 enum class IntermediatePrecision { f32, f16, bracketed10 };
+
+// Garcia's bracketing of one real 1D kernel G: G' = (G - O) / S. The GPU uploads exactly these.
+struct BracketedKernel {
+  std::vector<float> taps;  // G', >= 0, sums to 1
+  float offset = 0.0f;      // O = min G
+  float scale = 0.0f;       // S = sum (G - O)
+};
+BracketedKernel bracket_kernel(const std::vector<float>& g);
 const char* to_string(IntermediatePrecision precision);
 IntermediatePrecision intermediate_precision_from_string(const std::string& name);  // throws on unknown names
 

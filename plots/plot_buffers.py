@@ -17,14 +17,10 @@ full-res FLAG carries the pattern of its k-px sample grid and the reduced pipeli
 Bottom right: GPU time of the FLAG passes (downsample, bracket, horizontal, vertical, upsample: the
 frame without the CoC pass, which every configuration shares) vs buffer MiB at that resolution.
 """
-import json
-import math
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import bokehplot
+import matplotlib.pyplot as plt
 
 MARKERS = {"f32": "o", "f16": "s", "r11g11b10f": "^", "unorm10_bracketed": "D", "unorm16_bracketed": "P"}
 SCALE_COLOURS = {1: "#1f77b4", 2: "#ff7f0e", 4: "#2ca02c"}
@@ -41,10 +37,8 @@ def res_key(p):
     return (p["width_px"], p["height_px"])
 
 
-def main(path, prefix):
-    with open(path) as f:
-        doc = json.load(f)
-    ctx, cfg = doc["context"], doc["config"]
+def main(doc, prefix):
+    cfg = doc["config"]
     points, skipped = doc["points"], doc.get("skipped", [])
     resolutions = sorted({res_key(p) for p in points} | {res_key(s) for s in skipped}, key=lambda r: r[0] * r[1])
     if not resolutions:
@@ -156,19 +150,10 @@ def main(path, prefix):
     ax.set_title(f"{big[0]}x{big[1]}: time vs buffer size (markers as above)", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
 
-    device = ctx.get("device") or {}
-    fig.suptitle(
-        f"FLAG 3D buffer precision x scale, {cfg['scene']}, N {cfg['sizes']}, k = {cfg['spacing_px']}\n"
-        f"{device.get('name', 'no device')} ({device.get('driver_info', '')}), "
-        f"LP_NUM_THREADS={ctx['lp_num_threads']}, {ctx['date_utc']}, "
-        f"commit {ctx['git_commit']}" + ("" if doc.get("status") == "complete" else f"  [{doc.get('status')}]"),
-        fontsize=9)
-    for ext in ("png", "svg"):
-        fig.savefig(f"{prefix}.{ext}", dpi=110)
-    print(f"wrote {prefix}.png and {prefix}.svg")
+    fig.suptitle(f"FLAG 3D buffer precision x scale, {cfg['scene']}, N {cfg['sizes']}, k = {cfg['spacing_px']}\n"
+                 f"{bokehplot.context_line(doc)}", fontsize=9)
+    bokehplot.save(fig, prefix)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    bokehplot.run(main, __doc__)

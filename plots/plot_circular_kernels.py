@@ -9,21 +9,15 @@ Left: the profiles K(r) over r / disc radius, with the ideal unit disc and the t
 outside the transition band, where the equiripple fit's max error is the published figure
 (dotted line per component count). The legend gives measured vs published max ripple.
 """
-import json
-import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import bokehplot
+import matplotlib.pyplot as plt
 
 COLOURS = ["#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22"]  # as plot_figure9.py's circularN
 
 
-def main(path, prefix):
-    with open(path) as f:
-        doc = json.load(f)
-    ctx, cfg = doc["context"], doc["config"]
+def main(doc, prefix):
+    cfg = doc["config"]
     edge = cfg["disc_edge_u"]
     pass_end, stop_start = cfg["passband_end_u"] / edge, cfg["stopband_start_u"] / edge
     fig, (ax, ax_err) = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
@@ -69,16 +63,12 @@ def main(path, prefix):
         f"{k['components']}: {k['kernel_radius_px']} / {k['taps_per_pixel']}"
         for k in doc["kernels"])
     fig.suptitle(
-        f"Circular separable DoF kernels (Niemitalo 2010 / Garcia 2018), {ctx['date_utc']}, commit {ctx['git_commit']}\n"
+        f"Circular separable DoF kernels (Niemitalo 2010 / Garcia 2018), {bokehplot.context_line(doc)}\n"
         f"at disc radius {cfg['disc_radius_px']:g} px, components: kernel radius R (px) / taps per pixel and channel, "
         f"both passes:  {costs}",
         fontsize=9)
-    for ext in ("png", "svg"):
-        fig.savefig(f"{prefix}.{ext}", dpi=110)
-    print(f"wrote {prefix}.png and {prefix}.svg")
+    bokehplot.save(fig, prefix)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    bokehplot.run(main, __doc__)

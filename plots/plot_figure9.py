@@ -7,13 +7,10 @@ Left: linear axes, as in the paper. Right: log-log, where a power law is a strai
 fitted exponent (legend) is its slope. Markers are medians; bars span the interquartile range;
 the pale band spans min..max over repetitions.
 """
-import json
-import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import bokehplot
+import matplotlib.pyplot as plt
+from matplotlib.ticker import NullLocator
 
 STYLE = {  # method -> colour; backend -> line style and marker
     "naive": "#d62728", "flag": "#1f77b4",
@@ -35,10 +32,8 @@ def label(series):
     return text
 
 
-def main(path, prefix):
-    with open(path) as f:
-        doc = json.load(f)
-    ctx, cfg = doc["context"], doc["config"]
+def main(doc, prefix):
+    cfg = doc["config"]
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
     for ax, loglog in zip(axes, (False, True)):
         for s in doc["series"]:
@@ -60,24 +55,16 @@ def main(path, prefix):
         if loglog:
             ax.set_xscale("log")
             ax.set_yscale("log")
+            ax.set_xticks(cfg["sizes"], [str(n) for n in cfg["sizes"]])
+            ax.xaxis.set_minor_locator(NullLocator())
             ax.set_title("log-log: slope = growth exponent (fit over the larger half of N)")
         else:
             ax.set_title("Frame time vs filter size (cf. FLAG paper Fig. 9)")
             ax.set_ylim(bottom=0)
     axes[0].legend(fontsize=8, loc="upper left")
-    device = ctx.get("device") or {}
-    fig.suptitle(
-        f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']} on {device.get('name', 'no GPU device')} "
-        f"({device.get('driver_info', '')}), LP_NUM_THREADS={ctx['lp_num_threads']}, "
-        f"{ctx['cpu_cores']} cores, {ctx['date_utc']}, commit {ctx['git_commit']}"
-        + ("" if doc.get("status") == "complete" else f"  [{doc.get('status')}]"),
-        fontsize=9)
-    for ext in ("png", "svg"):
-        fig.savefig(f"{prefix}.{ext}", dpi=110)
-    print(f"wrote {prefix}.png and {prefix}.svg")
+    fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}: {bokehplot.context_line(doc)}", fontsize=9)
+    bokehplot.save(fig, prefix)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    bokehplot.run(main, __doc__)

@@ -7,14 +7,9 @@ x: median frame time (log scale; bars span the interquartile range). y: PSNR aga
 energy-sum scatter (higher is better). The staircase joins the Pareto front: for a time budget on
 the x axis, the best accuracy any configuration offers. Exact results (PSNR infinite) sit on top.
 """
-import json
-import math
-import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import bokehplot
+import matplotlib.pyplot as plt
 
 COLOURS = {"naive": "#d62728", "flag": "#1f77b4", "circular1": "#2ca02c", "circular2": "#9467bd",
            "circular3": "#8c564b", "circular4": "#e377c2", "circular5": "#7f7f7f", "circular6": "#bcbd22"}
@@ -27,10 +22,8 @@ def psnr_of(c, cap):
     return cap if p is None else p
 
 
-def main(path, prefix):
-    with open(path) as f:
-        doc = json.load(f)
-    configs, cfg, ctx = doc["configurations"], doc["config"], doc["context"]
+def main(doc, prefix):
+    configs, cfg = doc["configurations"], doc["config"]
     finite = [c["error"]["vs_energy_sum"]["psnr_db"] for c in configs if c["error"]["vs_energy_sum"]["psnr_db"] is not None]
     cap = (max(finite) + 5) if finite else 60
     fig, ax = plt.subplots(figsize=(11, 6.5), constrained_layout=True)
@@ -67,16 +60,10 @@ def main(path, prefix):
     ax.set_ylabel("PSNR vs exact energy-sum scatter (dB, higher is better)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="lower right", ncol=2)
-    device = ctx.get("device") or {}
-    ax.set_title(f"Speed vs accuracy: {cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, max CoC {cfg['max_coc_px']} px, "
-                 f"{device.get('name', cfg['backend'])}, LP_NUM_THREADS={ctx['lp_num_threads']}, commit {ctx['git_commit']}",
-                 fontsize=9)
-    for ext in ("png", "svg"):
-        fig.savefig(f"{prefix}.{ext}", dpi=110)
-    print(f"wrote {prefix}.png and {prefix}.svg")
+    ax.set_title(f"Speed vs accuracy: {cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, max CoC {cfg['max_coc_px']} px\n"
+                 f"{bokehplot.context_line(doc)}", fontsize=9)
+    bokehplot.save(fig, prefix)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    main(sys.argv[1], sys.argv[2])
+    bokehplot.run(main, __doc__)

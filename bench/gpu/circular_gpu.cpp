@@ -43,29 +43,13 @@ constexpr int kFarLayer = 0, kNearLayer = 1;
 // the vertical pass adds colour and output.
 constexpr std::uint32_t kConvolutionBindings = 10, kVerticalBindings = 12;
 
-// Garcia's bracketing of one real 1D kernel, computed exactly as bracket() in circular_separable.cpp.
-struct Bracketed {
-  std::vector<float> taps;
-  float offset = 0.0f, scale = 0.0f;
-};
-
-Bracketed bracket(const std::vector<float>& g) {
-  Bracketed b;
-  b.offset = *std::min_element(g.begin(), g.end());
-  double s = 0.0;
-  for (float v : g) s += v - b.offset;
-  b.scale = static_cast<float>(s);
-  for (float v : g) b.taps.push_back(static_cast<float>((v - b.offset) / s));
-  return b;
-}
-
 // The Kernel block of circular_common.glsl: weight[6], bracket[6], then taps[c * (2R + 1) + i].
 std::vector<float> kernel_block(const CircularKernel& k) {
   std::vector<float> block(4 * (12 + k.components * k.tap_count()), 0.0f);
   for (int c = 0; c < k.components; ++c) {
     std::vector<float> re, im;
     for (std::complex<float> t : k.taps[c]) re.push_back(t.real()), im.push_back(t.imag());
-    const Bracketed br = bracket(re), bi = bracket(im);
+    const BracketedKernel br = bracket_kernel(re), bi = bracket_kernel(im);
     block[4 * c + 0] = k.weight_real[c];
     block[4 * c + 1] = k.weight_imag[c];
     float* b = &block[4 * (6 + c)];
