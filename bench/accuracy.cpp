@@ -1,6 +1,9 @@
 #include "accuracy.hpp"
 
+#include <chrono>
 #include <cmath>
+
+#include <fmt/format.h>
 
 #include "coc.hpp"
 
@@ -9,8 +12,14 @@ namespace bokeh {
 ExactReferences exact_references(const Scene& scene, const Lens& lens, float max_radius_px,
                                  ExactReferenceCache& cache) {
   const Image radius = coc_radius_image(scene.depth_m, lens, max_radius_px);
-  return {cache.get(scene.color, radius, scene.depth_m, ScatterComposite::energy_sum),
-          cache.get(scene.color, radius, scene.depth_m, ScatterComposite::depth_ordered)};
+  const auto start = std::chrono::steady_clock::now();
+  ExactReferences refs{cache.get(scene.color, radius, scene.depth_m, ScatterComposite::energy_sum),
+                       cache.get(scene.color, radius, scene.depth_m, ScatterComposite::depth_ordered)};
+  fmt::print("exact references for {}x{}, max radius {} px: {:.2f} s (cache: {})\n", scene.color.width,
+             scene.color.height, max_radius_px,
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+             cache.directory().string());
+  return refs;
 }
 
 nlohmann::json metrics_json(const ErrorMetrics& m) {

@@ -25,7 +25,7 @@ struct Figure9Options {
   std::vector<int> sizes = {5, 9, 13, 17, 21, 25, 29, 33, 37, 41};
   int spacing_px = 2, width_px = 800, height_px = 600;
   std::string scene = "hoops", precision, device;
-  std::vector<std::string> methods = {"naive", "flag"};
+  std::vector<std::string> methods = {"naive", "flag", "circular1", "circular2"};
   std::vector<std::string> backends = {"gpu", "cpu"};
   double budget_s = 300;
   int cpu_threads = default_cpu_threads();

@@ -2,9 +2,7 @@
 // numerically integrated disc/square overlaps, and depth-ordered cases small enough to work by hand.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <numbers>
 #include <random>
@@ -302,19 +300,5 @@ TEST(ExactReferenceCache, StoresOnceAndReadsBackTheSameImage) {
 }
 
 // Timing of the size sweeps use: run with --gtest_also_run_disabled_tests --gtest_filter='*Timing*'.
-TEST(ExactScatter, DISABLED_Timing800x600HoopsRadius40) {
-  const Scene scene = make_scene("hoops", 800, 600);
-  const Lens lens = with_max_coc_radius(scene.lens, scene.depth_m, 40.0);
-  const Image radius = coc_radius_image(scene.depth_m, lens, 40.0f);
-  for (ScatterComposite mode : {ScatterComposite::energy_sum, ScatterComposite::depth_ordered})
-    for (int threads : {1, 2}) {
-      const auto start = std::chrono::steady_clock::now();
-      const Image out = exact_scatter(scene.color, radius, scene.depth_m, mode, threads);
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::printf("exact_scatter %s 800x600 hoops r<=40, %d threads: %.2f s\n", to_string(mode).c_str(), threads,
-                  seconds);
-    }
-}
-
 }  // namespace
 }  // namespace bokeh
