@@ -68,11 +68,6 @@ Resolution parse_resolution(const std::string& text) {
   return r;
 }
 
-nlohmann::json distribution_json(const Distribution& d) {
-  return {{"median", d.median}, {"q1", d.q1}, {"q3", d.q3}, {"min", d.min}, {"max", d.max}, {"mean", d.mean},
-          {"stddev", d.stddev}};
-}
-
 std::string describe_error(const nlohmann::json& e) {
   const auto& psnr = e["psnr_db"];
   return fmt::format("RMSE {:.3e}  PSNR {:>9}  max {:.3e}", e["rmse"].get<double>(),

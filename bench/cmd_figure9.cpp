@@ -34,11 +34,6 @@ struct Figure9Options {
   int near_components = 0;  // circular filters: near-field components (0: the method's)
 };
 
-nlohmann::json distribution_json(const Distribution& d) {
-  return {{"median", d.median}, {"q1", d.q1}, {"q3", d.q3}, {"min", d.min},
-          {"max", d.max},       {"mean", d.mean}, {"stddev", d.stddev}};
-}
-
 nlohmann::json fit_json(const PowerLawFit& f) {
   return {{"exponent", f.exponent}, {"coefficient_ms", f.coefficient}, {"r_squared", f.r_squared}, {"points", f.points}};
 }

@@ -128,9 +128,7 @@ void tradeoff(TradeoffOptions o) {
                          {"k", c.options.pattern.spacing_px},
                          {"max_radius_px", c.options.pattern.max_radius_px()},
                          {"samples_per_pixel", c.filter->samples_per_pixel(c.options)},
-                         {"frame_ms", {{"median", stats.frame_ms.median}, {"q1", stats.frame_ms.q1},
-                                       {"q3", stats.frame_ms.q3}, {"min", stats.frame_ms.min},
-                                       {"max", stats.frame_ms.max}}},
+                         {"frame_ms", distribution_json(stats.frame_ms)},
                          {"pass_ms", stats.pass_ms},
                          {"repetitions", stats.repetitions},
                          {"error", error}});

@@ -40,13 +40,17 @@ FilterRegistration circular_registration(int components) {
           [components](gpu::GpuFrame& frame, const gpu::FilterOptions& options) {
             return gpu::make_circular_gpu(frame, options, components);
           },
-          // Near and far layers, each a horizontal and a vertical pass over C complex taps.
+          // Near and far layers, each a horizontal and a vertical pass over C complex taps of the kernel
+          // whose disc edge (u = 1.1) falls on the max radius: tap radius ceil(s * radius / 1.1).
           [components](const gpu::FilterOptions& o) {
-            const int radius = std::max(1, static_cast<int>(o.pattern.max_radius_px()));
+            const double disc_px = std::max(1.0f, o.pattern.max_radius_px());
             const int near = o.near_components > 0 ? o.near_components : components;
-            return static_cast<double>(
-                circular_cost(components, radius, IntermediatePrecision::f32).taps_per_pixel +
-                circular_cost(near, radius, IntermediatePrecision::f32).taps_per_pixel);
+            long taps = 0;
+            for (int c : {components, near}) {
+              const int tap_radius = make_circular_kernel_for_disc(c, disc_px).radius_px;
+              taps += circular_cost(c, tap_radius, IntermediatePrecision::f32).taps_per_pixel;
+            }
+            return static_cast<double>(taps);
           },
           /*samples_pattern=*/false};
 }

@@ -1,8 +1,6 @@
 #include "report.hpp"
 
-#include <cctype>
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -12,11 +10,10 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
+#include "build_info.hpp"  // generated: BOKEH_GIT_COMMIT
+
 #ifndef BOKEH_SOURCE_DIR
 #define BOKEH_SOURCE_DIR "."
-#endif
-#ifndef BOKEH_GIT_COMMIT
-#define BOKEH_GIT_COMMIT "unknown"
 #endif
 
 namespace bokeh {
@@ -32,26 +29,6 @@ std::string cpu_model() {
       return colon == std::string::npos ? line : line.substr(colon + 2);
     }
   return "unknown";
-}
-
-// The source tree's commit at run time (the binary may be older than the checkout), marked -dirty
-// when the tree has uncommitted changes; the configure-time commit if git cannot tell.
-std::string git_commit() {
-  auto run = [](const std::string& cmd) {
-    std::string out;
-    if (FILE* pipe = popen(cmd.c_str(), "r")) {
-      char buf[256];
-      while (std::fgets(buf, sizeof buf, pipe)) out += buf;
-      if (pclose(pipe) != 0) return std::string();
-    }
-    while (!out.empty() && std::isspace(static_cast<unsigned char>(out.back()))) out.pop_back();
-    return out;
-  };
-  const std::string git = fmt::format("git -C '{}' ", BOKEH_SOURCE_DIR);
-  const std::string head = run(git + "rev-parse --short=12 HEAD 2>/dev/null");
-  if (head.empty()) return BOKEH_GIT_COMMIT;
-  const bool dirty = !run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty();
-  return dirty ? head + "-dirty" : head;
 }
 
 std::string env_or(const char* name, const char* fallback) {
@@ -80,7 +57,7 @@ nlohmann::json run_context(const vk::DeviceInfo* device) {
   const auto now = std::chrono::system_clock::now();
   nlohmann::json ctx = {
       {"date_utc", fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", fmt::gmtime(std::chrono::system_clock::to_time_t(now)))},
-      {"git_commit", git_commit()},
+      {"git_commit", BOKEH_GIT_COMMIT},  // what the binary was built from; -dirty: with uncommitted changes
       {"bokehbench_version", BOKEH_VERSION},
       {"compiler", fmt::format("{} {}", "g++", __VERSION__)},
       {"cpu_model", cpu_model()},

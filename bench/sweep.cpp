@@ -83,6 +83,11 @@ Sweep::~Sweep() {
 
 bool Sweep::interrupted() { return g_interrupted; }
 
+nlohmann::json distribution_json(const Distribution& d) {
+  return {{"median", d.median}, {"q1", d.q1}, {"q3", d.q3},         {"min", d.min},
+          {"max", d.max},       {"mean", d.mean}, {"stddev", d.stddev}};
+}
+
 PointStats Sweep::measure(const std::string& name, const std::function<void()>& warm_up, const FrameFn& frame,
                           bool gpu) {
   const auto start = std::chrono::steady_clock::now();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <nlohmann/json.hpp>
 
 #include "vk/timestamps.hpp"
 
@@ -24,6 +25,8 @@ struct Distribution {
   double median = 0, q1 = 0, q3 = 0, min = 0, max = 0, mean = 0, stddev = 0;
   double relative_iqr() const { return median > 0 ? (q3 - q1) / median : 0; }
 };
+// {median, q1, q3, min, max, mean, stddev}: how every results file reports a timing.
+nlohmann::json distribution_json(const Distribution& d);
 
 struct PointStats {
   Distribution frame_ms;                  // over repetitions, each the mean of its iterations

@@ -10,9 +10,13 @@
 #include "coc.hpp"
 #include "exact_scatter.hpp"
 #include "scene.hpp"
+#include "test_support.hpp"
 
 namespace bokeh {
 namespace {
+
+using namespace bokeh::test;
+using bokeh::test::channel_sum;  // overloads the local std::vector<double> version below
 
 constexpr double kPi = std::numbers::pi;
 
@@ -20,20 +24,6 @@ double channel_sum(const std::vector<double>& rgb, int k) {
   double s = 0.0;
   for (std::size_t i = k; i < rgb.size(); i += 3) s += rgb[i];
   return s;
-}
-
-double channel_sum(const Image& image, int k) {
-  double s = 0.0;
-  for (std::size_t p = 0; p < image.pixel_count(); ++p) s += image.pixels[p * image.channels + k];
-  return s;
-}
-
-Image random_image(int w, int h, int channels, float lo, float hi, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(lo, hi);
-  Image img(w, h, channels);
-  for (float& v : img.pixels) v = u(rng);
-  return img;
 }
 
 // Area of the disc of radius r (centre = pixel centre) inside the unit square at offset (dx, dy), by

@@ -8,24 +8,12 @@
 #include "coc.hpp"
 #include "flag.hpp"
 #include "naive_gather.hpp"
+#include "test_support.hpp"
 
 namespace bokeh {
 namespace {
 
-Image random_image(int w, int h, int channels, unsigned seed, float lo, float hi) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> dist(lo, hi);
-  Image img(w, h, channels);
-  for (float& v : img.pixels) v = dist(rng);
-  return img;
-}
-
-double channel_sum(const Image& img) {
-  double s = 0;
-  for (std::size_t p = 0; p < img.pixel_count(); ++p)
-    for (int c = 0; c < 3; ++c) s += img.pixels[p * img.channels + c];
-  return s;
-}
+using namespace bokeh::test;
 
 TEST(DiscreteDisc, AreaCountsPatternSamplesInsideTheDisc) {
   const GatherPattern p{41, 2};
@@ -47,7 +35,7 @@ TEST(DiscreteDisc, ReachLayerMatchesDiscTestExactly) {
 }
 
 TEST(CpuReferences, RadiusZeroIsTheIdentity) {
-  const Image color = random_image(23, 17, 3, 1, 0.0f, 5.0f);
+  const Image color = random_image(23, 17, 3, 0.0f, 5.0f, 1);
   const Image radius(23, 17, 1, 0.0f);
   for (const GatherPattern& p : {GatherPattern{9, 2}, GatherPattern{5, 1}}) {
     const Image packed = pack_gather_input(color, radius, p);
@@ -61,16 +49,17 @@ TEST(CpuReferences, RadiusZeroIsTheIdentity) {
 TEST(CpuReferences, EnergyIsConservedAwayFromBorders) {
   const GatherPattern p{11, 2};  // max radius 10 px
   const int w = 64, h = 48, margin = 11;
-  Image color = random_image(w, h, 3, 2, 0.0f, 4.0f);
-  const Image radius = random_image(w, h, 1, 3, 0.0f, p.max_radius_px());
+  Image color = random_image(w, h, 3, 0.0f, 4.0f, 2);
+  const Image radius = random_image(w, h, 1, 0.0f, p.max_radius_px(), 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       if (x < margin || y < margin || x >= w - margin || y >= h - margin)
         for (int c = 0; c < 3; ++c) color.px(x, y)[c] = 0.0f;
   const Image packed = pack_gather_input(color, radius, p);
-  const double in = channel_sum(color);
-  EXPECT_NEAR(channel_sum(naive_gather(packed, p, 2)) / in, 1.0, 1e-5);
-  EXPECT_NEAR(channel_sum(flag_blur(packed, p, LayerPrecision::f32, 2)) / in, 1.0, 1e-5);
+  auto rgb_sum = [](const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); };
+  const double in = rgb_sum(color);
+  EXPECT_NEAR(rgb_sum(naive_gather(packed, p, 2)) / in, 1.0, 1e-5);
+  EXPECT_NEAR(rgb_sum(flag_blur(packed, p, LayerPrecision::f32, 2)) / in, 1.0, 1e-5);
 }
 
 TEST(CpuReferences, ConstantImageAtConstantRadiusStaysConstantInside) {
@@ -84,8 +73,8 @@ TEST(CpuReferences, ConstantImageAtConstantRadiusStaysConstantInside) {
 
 TEST(CpuReferences, FlagEqualsNaiveGather) {
   const GatherPattern p{13, 2};
-  const Image color = random_image(50, 37, 3, 4, 0.0f, 10.0f);
-  const Image radius = random_image(50, 37, 1, 5, 0.0f, p.max_radius_px());
+  const Image color = random_image(50, 37, 3, 0.0f, 10.0f, 4);
+  const Image radius = random_image(50, 37, 1, 0.0f, p.max_radius_px(), 5);
   const Image packed = pack_gather_input(color, radius, p);
   const Image naive = naive_gather(packed, p, 2), flag = flag_blur(packed, p, LayerPrecision::f32, 2);
   for (std::size_t i = 0; i < naive.pixels.size(); ++i)

@@ -30,9 +30,12 @@
 #include "coc.hpp"
 #include "pipeline.hpp"
 #include "scene.hpp"
+#include "test_support.hpp"
 
 namespace bokeh {
 namespace {
+
+using namespace bokeh::test;
 
 vk::Context& context() {
   static vk::Context ctx;
@@ -55,18 +58,6 @@ GpuRun run_on_gpu(const std::string& method, const Image& color, const Image& de
   gpu::warm_up(frame, *filter, timer);
   gpu::run_frame(frame, *filter, timer);
   return {frame.read_output(), frame.read_packed()};
-}
-
-// Worst-case blurred-channel error when every stored real (imaginary) part of component c is off by
-// at most err_re[c] (err_im[c]): the vertical pass computes sum_j Hre (wr Fr + wi Fi) + Him (wi Fr - wr Fi).
-double propagate(const CircularKernel& k, const std::vector<double>& err_re, const std::vector<double>& err_im) {
-  double bound = 0.0;
-  for (int c = 0; c < k.components; ++c)
-    for (std::complex<float> f : k.taps[c]) {
-      const double wr = k.weight_real[c], wi = k.weight_imag[c];
-      bound += err_re[c] * std::abs(wr * f.real() + wi * f.imag()) + err_im[c] * std::abs(wi * f.real() - wr * f.imag());
-    }
-  return bound;
 }
 
 // E for one layer: the bound on |GPU - CPU| of any blurred channel (see the file comment).
@@ -247,31 +238,6 @@ TEST(GpuCircularMemory, IntermediateBytesMatchCircularCost) {
     EXPECT_GE(filter->intermediate_bytes(), expected) << to_string(p);
     EXPECT_LE(filter->intermediate_bytes(), expected + 16384) << to_string(p);
   }
-}
-
-// Radius where the output along the four axis directions first drops below half the plateau
-// (mean over r <= disc / 2), linearly interpolated between pixels, averaged over the directions.
-double half_plateau_radius(const Image& img, int channel, int cx, int cy, double disc_radius_px) {
-  double plateau = 0.0;
-  int count = 0;
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x)
-      if (std::hypot(x - cx, y - cy) <= disc_radius_px / 2) plateau += img.px(x, y)[channel], ++count;
-  plateau /= count;
-  double sum = 0.0;
-  const int dirs[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-  for (const auto& d : dirs) {
-    double prev = img.px(cx, cy)[channel];
-    for (int i = 1;; ++i) {
-      const double v = img.px(cx + i * d[0], cy + i * d[1])[channel];
-      if (v < plateau / 2) {
-        sum += (i - 1) + (prev - plateau / 2) / (prev - v);
-        break;
-      }
-      prev = v;
-    }
-  }
-  return sum / 4;
 }
 
 // A point light behind the focus plane with every pixel's CoC clamped at the max radius: w = 1

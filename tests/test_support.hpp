@@ -1,0 +1,74 @@
+#pragma once
+// Helpers several test files share: random images, sums, differences, disc radius, and the error
+// propagation of the circular filters' vertical pass.
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <random>
+#include <vector>
+
+#include "circular_coefficients.hpp"
+#include "image.hpp"
+
+namespace bokeh::test {
+
+// Uniform in [lo, hi), reproducible for a seed.
+inline Image random_image(int w, int h, int channels, float lo, float hi, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(lo, hi);
+  Image img(w, h, channels);
+  for (float& v : img.pixels) v = u(rng);
+  return img;
+}
+
+inline double channel_sum(const Image& image, int channel) {
+  double s = 0.0;
+  for (std::size_t p = 0; p < image.pixel_count(); ++p) s += image.pixels[p * image.channels + channel];
+  return s;
+}
+
+inline double max_abs_diff(const Image& a, const Image& b) {
+  double m = 0.0;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, std::abs(double(a.pixels[i]) - b.pixels[i]));
+  return m;
+}
+
+// Radius where the output along the four axis directions first drops below half the plateau
+// (mean over r <= disc / 2), linearly interpolated between pixels, averaged over the directions.
+inline double half_plateau_radius(const Image& img, int channel, int cx, int cy, double disc_radius_px) {
+  double plateau = 0.0;
+  int count = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (std::hypot(x - cx, y - cy) <= disc_radius_px / 2) plateau += img.px(x, y)[channel], ++count;
+  plateau /= count;
+  double sum = 0.0;
+  const int dirs[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (const auto& d : dirs) {
+    double prev = img.px(cx, cy)[channel];
+    for (int i = 1;; ++i) {
+      const double v = img.px(cx + i * d[0], cy + i * d[1])[channel];
+      if (v < plateau / 2) {
+        sum += (i - 1) + (prev - plateau / 2) / (prev - v);
+        break;
+      }
+      prev = v;
+    }
+  }
+  return sum / 4;
+}
+
+// Worst-case blurred-channel error of a circular filter when every stored real (imaginary) part of
+// component c is off by at most err_re[c] (err_im[c]): the vertical pass computes
+// sum_j Hre (wr Fr + wi Fi) + Him (wi Fr - wr Fi).
+inline double propagate(const CircularKernel& k, const std::vector<double>& err_re, const std::vector<double>& err_im) {
+  double bound = 0.0;
+  for (int c = 0; c < k.components; ++c)
+    for (std::complex<float> f : k.taps[c]) {
+      const double wr = k.weight_real[c], wi = k.weight_imag[c];
+      bound += err_re[c] * std::abs(wr * f.real() + wi * f.imag()) + err_im[c] * std::abs(wi * f.real() - wr * f.imag());
+    }
+  return bound;
+}
+
+}  // namespace bokeh::test
