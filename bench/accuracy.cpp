@@ -1,7 +1,9 @@
 #include "accuracy.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -24,16 +26,37 @@ ExactReferences exact_references(const Scene& scene, const Lens& lens, float max
 
 nlohmann::json metrics_json(const ErrorMetrics& m) {
   auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  return {{"rmse", m.rmse},
+  return {{"rmse", finite_or_null(m.rmse)},
           {"psnr_db", finite_or_null(m.psnr_db)},
-          {"max_abs_error", m.max_abs_error},
+          {"max_abs_error", finite_or_null(m.max_abs_error)},
           {"mean_relative_energy_error", finite_or_null(m.mean_relative_energy_error)},
-          {"ssim", m.ssim}};
+          {"ssim", finite_or_null(m.ssim)}};
+}
+
+std::size_t count_non_finite(const Image& image) {
+  return static_cast<std::size_t>(
+      std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
+}
+
+double psnr_for_ranking(const nlohmann::json& metrics) {
+  const auto& psnr = metrics["psnr_db"];
+  if (!psnr.is_null()) return psnr.get<double>();
+  const bool exact = !metrics["rmse"].is_null() && metrics["rmse"].get<double>() == 0.0;
+  return exact ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
+}
+
+std::string psnr_text(const nlohmann::json& metrics) {
+  const double psnr = psnr_for_ranking(metrics);
+  return std::isinf(psnr) ? (psnr > 0 ? "exact" : "n/a") : fmt::format("{:.2f} dB", psnr);
 }
 
 nlohmann::json error_json(const Image& result, const ExactReferences& references) {
+  const std::size_t non_finite = count_non_finite(result);
+  if (non_finite > 0)  // e.g. an HDR highlight overflowing a half-float buffer on a driver that rounds to inf
+    fmt::print(stderr, "warning: the result has {} non-finite values (inf/NaN): its metrics are null\n", non_finite);
   return {{"vs_energy_sum", metrics_json(compare_images(result, references.energy_sum))},
-          {"vs_depth_ordered", metrics_json(compare_images(result, references.depth_ordered))}};
+          {"vs_depth_ordered", metrics_json(compare_images(result, references.depth_ordered))},
+          {"non_finite_values", non_finite}};
 }
 
 }  // namespace bokeh

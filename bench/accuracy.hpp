@@ -22,9 +22,16 @@ struct ExactReferences {
 ExactReferences exact_references(const Scene& scene, const Lens& lens, float max_radius_px,
                                  ExactReferenceCache& cache);
 
-// {"vs_energy_sum": metrics, "vs_depth_ordered": metrics}. PSNR is null when the result is exact
-// (RMSE 0, PSNR +inf): JSON has no infinity.
+// {"vs_energy_sum": metrics, "vs_depth_ordered": metrics, "non_finite_values": count}. JSON has no
+// infinity or NaN: PSNR is null when the result is exact (RMSE 0), and every metric is null when the
+// result holds inf/NaN (counted in non_finite_values, and warned about on stderr).
 nlohmann::json error_json(const Image& result, const ExactReferences& references);
 nlohmann::json metrics_json(const ErrorMetrics& m);
+std::size_t count_non_finite(const Image& image);
+
+// PSNR of a metrics_json object for ranking: +inf when exact (RMSE 0), -inf when the result was not
+// finite (no usable metrics), else the value. psnr_text: "exact", "n/a" or "42.1 dB".
+double psnr_for_ranking(const nlohmann::json& metrics);
+std::string psnr_text(const nlohmann::json& metrics);
 
 }  // namespace bokeh

@@ -166,11 +166,10 @@ void figure9(Figure9Options o) {
                {"iterations_per_repetition", stats.iterations_per_repetition},
                {"measure_wall_s", stats.wall_s},
                {"error", error}});
-          const auto& psnr = error["vs_energy_sum"]["psnr_db"];
           fmt::print("[{:>3}/{}] {:<28} median {:10.3f} ms  IQR {:.3f}-{:.3f}  ({} reps x {} frames, {:.1f} s)  PSNR {}\n",
                      index, total, name, stats.frame_ms.median, stats.frame_ms.q1, stats.frame_ms.q3,
                      stats.repetitions, stats.iterations_per_repetition, stats.wall_s,
-                     psnr.is_null() ? "exact" : fmt::format("{:.1f} dB", psnr.get<double>()));
+                     psnr_text(error["vs_energy_sum"]));
         } catch (const std::exception& e) {
           skipped.push_back({{"method", method}, {"backend", backend}, {"N", n}, {"reason", e.what()}});
           fmt::print("[{:>3}/{}] {:<28} skipped: {}\n", index, total, name, e.what());

@@ -38,11 +38,13 @@ void write_comparison(const Scene& scene, const Image& result, float max_radius_
   const nlohmann::json error = error_json(result, refs);
   for (const char* which : {"vs_energy_sum", "vs_depth_ordered"}) {
     const auto& m = error[which];
-    fmt::print("  {:<17} PSNR {:>8}  RMSE {:.4g}  max |err| {:.4g}  energy err {:.2e}  SSIM {:.4f}\n", which,
-               m["psnr_db"].is_null() ? "exact" : fmt::format("{:.2f} dB", m["psnr_db"].get<double>()),
-               m["rmse"].get<double>(), m["max_abs_error"].get<double>(),
-               m["mean_relative_energy_error"].is_null() ? 0.0 : m["mean_relative_energy_error"].get<double>(),
-               m["ssim"].get<double>());
+    auto number = [&](const char* key, const char* format) {
+      return m[key].is_null() ? std::string("n/a") : fmt::format(fmt::runtime(format), m[key].get<double>());
+    };
+    fmt::print("  {:<17} PSNR {:>8}  RMSE {}  max |err| {}  energy err {}  SSIM {}\n", which,
+               psnr_text(m),
+               number("rmse", "{:.4g}"), number("max_abs_error", "{:.4g}"),
+               number("mean_relative_energy_error", "{:.2e}"), number("ssim", "{:.4f}"));
   }
   const std::filesystem::path out(o.out_path);
   const std::string sheet_path = (out.parent_path() / (out.stem().string() + "_compare.png")).string();

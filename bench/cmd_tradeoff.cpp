@@ -43,9 +43,8 @@ GatherPattern parse_pattern(const std::string& text) {
 std::vector<std::size_t> pareto_front(const nlohmann::json& configs) {
   std::vector<double> time_ms, psnr_db;
   for (const auto& c : configs) {
-    const auto& p = c["error"]["vs_energy_sum"]["psnr_db"];
     time_ms.push_back(c["frame_ms"]["median"].get<double>());
-    psnr_db.push_back(p.is_null() ? std::numeric_limits<double>::infinity() : p.get<double>());
+    psnr_db.push_back(psnr_for_ranking(c["error"]["vs_energy_sum"]));
   }
   return bokeh::pareto_front(time_ms, psnr_db, 0.01);
 }
@@ -132,10 +131,8 @@ void tradeoff(TradeoffOptions o) {
                          {"pass_ms", stats.pass_ms},
                          {"repetitions", stats.repetitions},
                          {"error", error}});
-      const auto& psnr = error["vs_energy_sum"]["psnr_db"];
-      fmt::print("[{:>3}/{}] {:<32} {:10.3f} ms  PSNR {:>9}  SSIM {:.4f}\n", i + 1, grid.size(), id,
-                 stats.frame_ms.median, psnr.is_null() ? "exact" : fmt::format("{:.2f} dB", psnr.get<double>()),
-                 error["vs_energy_sum"]["ssim"].get<double>());
+      fmt::print("[{:>3}/{}] {:<32} {:10.3f} ms  PSNR {:>9}  SSIM {}\n", i + 1, grid.size(), id,
+                 stats.frame_ms.median, psnr_text(error["vs_energy_sum"]), error["vs_energy_sum"]["ssim"].dump());
     } catch (const std::exception& e) {
       skipped.push_back({{"id", id}, {"reason", e.what()}});
       fmt::print("[{:>3}/{}] {:<32} skipped: {}\n", i + 1, grid.size(), id, e.what());
@@ -149,9 +146,8 @@ void tradeoff(TradeoffOptions o) {
   fmt::print("\nPareto front (fastest first: nothing is both faster and more accurate):\n");
   for (std::size_t i : pareto_front(configs)) {
     const auto& c = configs[i];
-    const auto& psnr = c["error"]["vs_energy_sum"]["psnr_db"];
     fmt::print("  for {:9.2f} ms you can have at best {:>9}  ({})\n", c["frame_ms"]["median"].get<double>(),
-               psnr.is_null() ? "exact" : fmt::format("{:.2f} dB", psnr.get<double>()), c["id"].get<std::string>());
+               psnr_text(c["error"]["vs_energy_sum"]), c["id"].get<std::string>());
   }
   fmt::print("wrote {}/tradeoff.json\n", o.out_dir);
   if (!complete) throw std::runtime_error("interrupted: finished configurations are in " + o.out_dir + "/tradeoff.json");

@@ -23,11 +23,14 @@ SIZE = {1: 8, 2: 6.5, 4: 5}
 
 def psnr_of(c, cap):
     p = c["error"]["vs_energy_sum"]["psnr_db"]
-    return cap if p is None else p
+    return cap if p is None else p  # null PSNR with a finite RMSE: exact
 
 
 def main(doc, prefix):
-    configs, cfg = doc["configurations"], doc["config"]
+    cfg = doc["config"]
+    # A result with inf/NaN has no metrics (all null): it cannot be placed, so it is counted instead.
+    configs = [c for c in doc["configurations"] if c["error"]["vs_energy_sum"]["rmse"] is not None]
+    unplaced = len(doc["configurations"]) - len(configs)
     finite = [c["error"]["vs_energy_sum"]["psnr_db"] for c in configs
               if c["error"]["vs_energy_sum"]["psnr_db"] is not None]
     cap = (max(finite) + 5) if finite else 60
@@ -71,7 +74,9 @@ def main(doc, prefix):
     handles.append(Line2D([], [], color="black", alpha=0.6, label="Pareto front"))
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="colour / marker")
     ax.set_title(f"Speed vs accuracy: {cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, max CoC {cfg['max_coc_px']} px, "
-                 f"patterns {' '.join(cfg['patterns'])}\n{bokehplot.context_line(doc)}", fontsize=9)
+                 f"patterns {' '.join(cfg['patterns'])}"
+                 + (f", {unplaced} with non-finite output not shown" if unplaced else "")
+                 + f"\n{bokehplot.context_line(doc)}", fontsize=9)
     bokehplot.save(fig, prefix)
 
 

@@ -122,6 +122,50 @@ TEST(GpuPipeline, EnergyIsConservedAwayFromBorders) {
   }
 }
 
+// Extremes a user will hit: they must give finite, bounded results or a failure the harness
+// measures, never a crash or a silent NaN.
+
+// An HDR highlight above half-float's largest finite value (65504). f32 layers keep it exactly;
+// RGBA16F layers cannot: the driver either saturates (lavapipe rounds toward zero, to 65504) or
+// overflows to inf. Either way the loss is visible in the numbers the harness reports.
+TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
+  Image color(32, 24, 3, 0.5f);
+  Image depth(32, 24, 1, 3.0f);  // everything in focus: radius 0, output = input in exact arithmetic
+  for (int c = 0; c < 3; ++c) color.px(16, 12)[c] = 1e5f;
+  const Lens lens;
+  const Image f32 = run_gpu(context(), find_filter("flag"), color, depth, lens, {{9, 2}, "f32"});
+  EXPECT_EQ(f32.px(16, 12)[0], 1e5f);
+  const Image f16 = run_gpu(context(), find_filter("flag"), color, depth, lens, {{9, 2}, "f16"});
+  const float v = f16.px(16, 12)[0];
+  EXPECT_FALSE(std::isnan(v));
+  EXPECT_TRUE(std::isinf(v) || v <= 65504.0f) << "f16 layers cannot hold 1e5: got " << v;
+  // Elsewhere the image is untouched (radius 0: nothing spreads).
+  EXPECT_NEAR(f16.px(3, 3)[1], 0.5f, 0.5f * std::ldexp(1.0f, -10));
+}
+
+// Near-zero depth makes equation (1) blow up; the CoC pass clamps it to the max radius.
+TEST(GpuExtremes, NearZeroDepthClampsToTheMaxRadius) {
+  Scene s = make_scene("hoops", 48, 32);
+  for (int x = 0; x < 48; ++x) *s.depth_m.px(x, 16) = 1e-7f;
+  const gpu::FilterOptions options{{7, 2}, "f32"};
+  const Image reference = run_cpu(find_filter("naive"), s.color, s.depth_m, s.lens, options, 2);
+  for (const char* method : {"naive", "flag"}) {
+    const Image out = run_gpu(context(), find_filter(method), s.color, s.depth_m, s.lens, options);
+    for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v)) << method;
+    EXPECT_LT(max_rel_error(out, reference), 1e-5) << method;
+  }
+}
+
+// Circles far larger than the image: every pixel's disc leaves the frame on all sides.
+TEST(GpuExtremes, RadiiLargerThanTheImage) {
+  const Scene s = make_scene("pillars", 40, 24);
+  const gpu::FilterOptions options{{61, 4}, "f32"};  // max radius 120 px on a 40x24 image
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px());
+  const Image reference = run_cpu(find_filter("naive"), s.color, s.depth_m, lens, options, 2);
+  const Image out = run_gpu(context(), find_filter("flag"), s.color, s.depth_m, lens, options);
+  EXPECT_LT(max_rel_error(out, reference), 1e-5);
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, GpuMatchesCpu,
                          ::testing::Values(Case{"hoops", 9, 2}, Case{"pillars", 7, 3}, Case{"points", 11, 1},
                                            Case{"hoops", 1, 2}),
