@@ -47,7 +47,13 @@ class Sweep::Reporter : public benchmark::BenchmarkReporter {
   void ReportRuns(const std::vector<Run>& runs) override { runs_.insert(runs_.end(), runs.begin(), runs.end()); }
 
   std::vector<Run> take() { return std::exchange(runs_, {}); }
-  void accept(const std::vector<Run>& runs) { json_.ReportRuns(runs); }
+  // gbench names a run .../iterations:I/repetitions:R, but a point's I and R come from its pilot frame
+  // and change between runs; without them the names are stable, so compare.py can pair two runs.
+  // Both counts stay in the JSON as their own keys.
+  void accept(std::vector<Run> runs) {
+    for (Run& run : runs) run.run_name.iterations.clear(), run.run_name.repetitions.clear();
+    json_.ReportRuns(runs);
+  }
   void finish() {
     if (context_written_) json_.Finalize();
   }
