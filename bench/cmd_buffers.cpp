@@ -55,14 +55,8 @@ struct Resolution {
 };
 
 Resolution parse_resolution(const std::string& text) {
-  const auto x = text.find('x');
-  Resolution r;
-  try {
-    if (x == std::string::npos) throw std::invalid_argument("");
-    r = {std::stoi(text.substr(0, x)), std::stoi(text.substr(x + 1))};
-  } catch (const std::exception&) {
-    throw std::invalid_argument("resolution '" + text + "' is not WIDTHxHEIGHT (e.g. 1920x1080)");
-  }
+  const auto [width, height] = parse_int_pair(text, "resolution", "WIDTHxHEIGHT (e.g. 1920x1080)");
+  const Resolution r{width, height};
   if (r.width < 16 || r.height < 16 || r.width > 16384 || r.height > 16384)
     throw std::invalid_argument("resolution '" + text + "' outside 16..16384 px per side");
   return r;
@@ -328,7 +322,7 @@ void add_buffers_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--budget-lines", o->budget_lines_mib, "Memory budgets (MiB) to report and draw")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember({"hoops", "pillars", "points"}));
+  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember(procedural_scene_names()));
   cmd->add_option("--cpu-threads", o->cpu_threads, "Threads for the CPU reference")->check(CLI::Range(1, 1024));
   cmd->add_option("--device", o->device, "Vulkan device index or name part");
   cmd->add_option("--out-dir", o->out_dir, "Where buffers.json and buffers_gbench.json go");

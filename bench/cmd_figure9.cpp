@@ -198,7 +198,7 @@ void add_figure9_command(CLI::App& app) {
   cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px (the paper uses 2)");
   cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
   cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
-  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember({"hoops", "pillars", "points"}));
+  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember(procedural_scene_names()));
   cmd->add_option("--methods", o->methods, "Methods to sweep");
   cmd->add_option("--backends", o->backends, "gpu and/or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
   cmd->add_option("--precision", o->precision,

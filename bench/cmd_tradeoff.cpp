@@ -12,6 +12,7 @@
 #include "parallel.hpp"
 #include "pipeline.hpp"
 #include "report.hpp"
+#include "scene.hpp"
 #include "stats.hpp"
 
 namespace bokeh {
@@ -31,9 +32,8 @@ struct TradeoffOptions {
 };
 
 GatherPattern parse_pattern(const std::string& text) {
-  const auto x = text.find('x');
-  if (x == std::string::npos) throw std::invalid_argument("pattern '" + text + "' is not NxK (e.g. 41x2)");
-  GatherPattern p{std::stoi(text.substr(0, x)), std::stoi(text.substr(x + 1))};
+  const auto [size_n, spacing_px] = parse_int_pair(text, "pattern", "NxK (e.g. 41x2)");
+  const GatherPattern p{size_n, spacing_px};
   validate(p);
   return p;
 }
@@ -160,7 +160,7 @@ void tradeoff(TradeoffOptions o) {
 void add_tradeoff_command(CLI::App& app) {
   auto o = std::make_shared<TradeoffOptions>();
   auto* cmd = app.add_subcommand("tradeoff", "Time vs error for every configuration, with the Pareto front");
-  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember({"hoops", "pillars", "points"}));
+  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember(procedural_scene_names()));
   cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
   cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
   cmd->add_option("--max-coc", o->max_coc_px, "The scene's largest CoC radius in px (sets the f-stop)")

@@ -83,26 +83,26 @@ ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> sp
   VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &set_));
 }
 
-void ComputePipeline::bind(std::uint32_t binding, const Buffer& buffer) {
-  const VkDescriptorBufferInfo info{buffer.get(), 0, VK_WHOLE_SIZE};
+void ComputePipeline::write_descriptor(std::uint32_t binding, VkDescriptorType type,
+                                       const VkDescriptorBufferInfo* buffer, const VkDescriptorImageInfo* image) {
   VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
   write.dstSet = set_;
   write.dstBinding = binding;
   write.descriptorCount = 1;
-  write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  write.pBufferInfo = &info;
+  write.descriptorType = type;
+  write.pBufferInfo = buffer;
+  write.pImageInfo = image;
   vkUpdateDescriptorSets(ctx_.device(), 1, &write, 0, nullptr);
+}
+
+void ComputePipeline::bind(std::uint32_t binding, const Buffer& buffer) {
+  const VkDescriptorBufferInfo info{buffer.get(), 0, VK_WHOLE_SIZE};
+  write_descriptor(binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &info, nullptr);
 }
 
 void ComputePipeline::bind(std::uint32_t binding, const StorageImage3D& image) {
   const VkDescriptorImageInfo info{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL};
-  VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  write.dstSet = set_;
-  write.dstBinding = binding;
-  write.descriptorCount = 1;
-  write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-  write.pImageInfo = &info;
-  vkUpdateDescriptorSets(ctx_.device(), 1, &write, 0, nullptr);
+  write_descriptor(binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, nullptr, &info);
 }
 
 void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,

@@ -27,6 +27,9 @@ class ComputePipeline {
                 std::uint32_t invocations_y) const;
 
  private:
+  void write_descriptor(std::uint32_t binding, VkDescriptorType type, const VkDescriptorBufferInfo* buffer,
+                        const VkDescriptorImageInfo* image);
+
   Context& ctx_;
   std::uint32_t push_constant_bytes_;
   std::uint32_t local_size_x_ = 8, local_size_y_ = 8;
