@@ -3,7 +3,8 @@
 
 #include "commands.hpp"
 #include "flag_memory.hpp"
-#include "gpu/gpu_filters.hpp"
+#include "flag_gpu.hpp"
+#include "method.hpp"
 #include "report.hpp"
 #include "vk/memory.hpp"
 
@@ -14,7 +15,7 @@ namespace {
 struct MemoryOptions {
   int width_px = 1920, height_px = 1080, size_n = 41;
   std::vector<std::string> precisions = {"f16", "f32"};
-  std::vector<int> scales = {1, 2, 4};
+  std::vector<int> scales;  // default: every scale FLAG has
   std::string device, out_path = "results/memory.json";
 };
 
@@ -35,10 +36,10 @@ void memory(const MemoryOptions& o) {
              "paper conv MiB", "allocated MiB", "allocated B", "paper prints");
   for (const auto& name : o.precisions) {
     const LayerPrecision precision = layer_precision_from_string(name);
-    for (int scale : o.scales) {
+    for (int scale : o.scales.empty() ? find_method("flag").buffer_scales : o.scales) {
       const FlagBufferExtent extent = flag_buffer_extent(o.width_px, o.height_px, pattern, scale);
       const double paper_bytes = flag_paper_bytes(o.width_px, o.height_px, pattern, precision, scale);
-      const auto allocated = vk::image_3d_requirement_bytes(ctx, gpu::layer_format(precision), extent.width,
+      const auto allocated = vk::image_3d_requirement_bytes(ctx, layer_format(precision), extent.width,
                                                             extent.height, extent.layers);
       const double printed = paper_printed_mb(o, precision, scale);
       fmt::print("{:<17} 1/{:<5} {:>14} {:>14.2f} {:>16.2f} {:>12} {:>12}\n", name, scale,
@@ -77,9 +78,9 @@ void add_memory_command(CLI::App& app) {
   cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(1, 16384));
   cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(1, 16384));
   cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
-  cmd->add_option("--precision", o->precisions, "Layer precisions")
-      ->check(CLI::IsMember({"f32", "f16", "r11g11b10f", "unorm10_bracketed", "unorm16_bracketed"}));
-  cmd->add_option("--scale", o->scales, "Buffer scales: 1 full, 2 half, 4 quarter")->check(CLI::IsMember({1, 2, 4}));
+  const Method& flag = find_method("flag");
+  cmd->add_option("--precision", o->precisions, "Layer precisions")->check(CLI::IsMember(flag.precisions));
+  cmd->add_option("--scale", o->scales, "Buffer scales: 1 full, 2 half, 4 quarter")->check(CLI::IsMember(flag.buffer_scales));
   cmd->add_option("--device", o->device, "Vulkan device index or name part");
   cmd->add_option("--out", o->out_path, "JSON output path");
   cmd->callback([o] { memory(*o); });

@@ -8,10 +8,10 @@
 
 #include "accuracy.hpp"
 #include "coc.hpp"
-#include "commands.hpp"
 #include "image_io.hpp"
 #include "parallel.hpp"
-#include "pipeline.hpp"
+#include "commands.hpp"
+#include "run.hpp"
 #include "scene.hpp"
 
 namespace bokeh {
@@ -24,7 +24,7 @@ struct RenderOptions {
   std::string out_path = "render.png";
   int width_px = 800, height_px = 600, size_n = 41, spacing_px = 2;
   std::optional<double> fit_max_coc_px;
-  int near_components = 0;  // circular filters: near-field components (0: the method's)
+  MethodOptionFlags method_options;
   int buffer_scale = 1;
   bool compare = false;
   std::string reference_cache = "build/reference-cache";
@@ -55,15 +55,16 @@ void write_comparison(const Scene& scene, const Image& result, float max_radius_
   fmt::print("wrote {}\n", sheet_path);
 }
 
-void render(const RenderOptions& o) {
+void render(RenderOptions& o) {
   Scene scene = o.color_path.empty() ? make_scene(o.scene_name, o.width_px, o.height_px)
                                      : load_scene(o.color_path, o.depth_path);
   if (!o.lens_path.empty()) scene.lens = load_lens_json(o.lens_path);
-  const FilterRegistration& filter = find_filter(o.method);
-  gpu::FilterOptions options{{o.size_n, o.spacing_px}, o.precision.empty() ? filter.precisions.front() : o.precision};
-  options.near_components = o.near_components;
+  const Method& method = find_method(o.method);
+  FilterOptions options = method.defaults({o.size_n, o.spacing_px});
+  if (!o.precision.empty()) options.precision = o.precision;
   options.buffer_scale = o.buffer_scale;
-  validate(options.pattern);
+  for (const auto& [key, value] : o.method_options.values_for({o.method})) options.values[key] = value;
+  check_options(method, options);
   if (o.fit_max_coc_px) scene.lens = with_max_coc_radius(scene.lens, scene.depth_m, *o.fit_max_coc_px);
 
   fmt::print("{} {}x{}, {} ({}) on {}, N={} k={} (max radius {} px), f/{:.3g} focus {} m\n", scene.name,
@@ -74,13 +75,13 @@ void render(const RenderOptions& o) {
   if (o.backend == "gpu") {
     vk::Context ctx(o.device);
     std::vector<vk::PassTime> passes;
-    result = run_gpu(ctx, filter, scene.color, scene.depth_m, scene.lens, options, &passes);
+    result = run_gpu(ctx, method, scene.color, scene.depth_m, scene.lens, options, &passes);
     fmt::print("device: {} ({})\n", ctx.info().name, ctx.info().driver_info);
     for (const auto& p : passes) fmt::print("  {:<12} {:9.3f} ms\n", p.pass, p.ms);
     fmt::print("  {:<12} {:9.3f} ms (one frame after warm-up)\n", "frame", vk::frame_ms(passes));
   } else if (o.backend == "cpu") {
     const auto start = std::chrono::steady_clock::now();
-    result = run_cpu(filter, scene.color, scene.depth_m, scene.lens, options, default_cpu_threads());
+    result = run_cpu(method, scene.color, scene.depth_m, scene.lens, options, default_cpu_threads());
     fmt::print("  cpu frame {:9.3f} ms\n",
                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   } else {
@@ -110,15 +111,13 @@ void add_render_command(CLI::App& app) {
                   "Lens JSON: focal_length_mm, f_stop, sensor_width_mm, focus_distance_m [, coc_model]")
       ->check(CLI::ExistingFile);
   cmd->add_option("--fit-max-coc", o->fit_max_coc_px, "Set the f-stop so the scene's largest CoC radius is this many px");
-  cmd->add_option("--method", o->method, "Filter method (naive, flag, ...)");
+  cmd->add_option("--method", o->method, "Filter method (`bokehbench methods` lists them)");
   cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
   cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px");
   cmd->add_option("--precision", o->precision, "Intermediate storage, e.g. FLAG layers f16 or f32 (default: the method's)");
-  cmd->add_option("--near-components", o->near_components,
-                  "Circular filters: near-field components (default: the method's N; circular2 with 1 is Garcia's)")
-      ->check(CLI::Range(1, 6));
-  cmd->add_option("--buffer-scale", o->buffer_scale, "FLAG: 3D buffer at 1/1, 1/2 or 1/4 resolution")
-      ->check(CLI::IsMember({1, 2, 4}));
+  o->method_options.add_to(cmd);
+  cmd->add_option("--buffer-scale", o->buffer_scale,
+                  "Resolution divisor of the method's intermediates (FLAG: 3D buffer at 1/1, 1/2 or 1/4)");
   cmd->add_option("--backend", o->backend, "gpu (Vulkan) or cpu (reference)")->check(CLI::IsMember({"gpu", "cpu"}));
   cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--out", o->out_path, "Output image: .exr (linear) or .png (tone-mapped)");

@@ -1,25 +1,48 @@
 #pragma once
 // Each bokehbench subcommand registers itself on the CLI11 app; main() only dispatches.
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
 namespace bokeh {
 
-// "AxB" with two positive integers (a resolution WIDTHxHEIGHT, a pattern NxK). Throws
-// std::invalid_argument naming `what` and showing `example` for anything else.
-inline std::pair<int, int> parse_int_pair(const std::string& text, const std::string& what, const std::string& example) {
-  const auto bad = [&] { return std::invalid_argument(what + " '" + text + "' is not of the form " + example); };
-  const auto x = text.find('x');
-  if (x == std::string::npos) throw bad();
-  auto number = [&](const std::string& part) {
-    if (part.empty() || part.size() > 6 || part.find_first_not_of("0123456789") != std::string::npos) throw bad();
-    return std::stoi(part);
-  };
-  return {number(text.substr(0, x)), number(text.substr(x + 1))};
-}
+struct SweepSettings;
+
+// Every registered method's own options as flags of a command (--near-components, ...), kept as
+// given; values_for() parses them for the chosen methods.
+class MethodOptionFlags {
+ public:
+  void add_to(CLI::App* cmd);
+  // key -> value for the options given; throws std::invalid_argument naming a flag that none of
+  // `methods` has, or a value the method refuses.
+  std::map<std::string, double> values_for(const std::vector<std::string>& methods) const;
+
+ private:
+  std::map<std::string, std::string> given_;
+};
+
+// What every sweep command takes: budget, device, output folders, memory budget, seed.
+struct SweepFlags {
+  double budget_s = 0;
+  std::string device, out_dir = "results", plots_dir = "plots", reference_cache = "build/reference-cache";
+  int cpu_threads = 0;
+  double max_buffer_mb = 0;
+  unsigned seed = 1;
+  bool plot = true;
+  void add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb = 0);
+  SweepSettings settings(const std::string& name, const std::string& plot_script) const;
+};
+
+// The methods a command sweeps when none are named: every registered method that is not kept out
+// of default sweeps.
+std::vector<std::string> default_sweep_methods();
+
+// True when the user gave `option` on the command line (so --quick must not override it).
+inline bool given(const CLI::Option* option) { return option->count() > 0; }
 
 void add_devices_command(CLI::App& app);
 void add_render_command(CLI::App& app);

@@ -1,10 +1,14 @@
-"""What every bokehbench plot shares: the context line under the title, saving PNG + SVG, argv."""
+"""What every bokehbench plot shares: the context line, styles taken from the results themselves
+(so a new method or precision is drawn without editing a table), saving PNG + SVG, argv."""
 import json
 import sys
 
 import matplotlib
 
 matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+MARKER_CYCLE = "osD^vP<>Xph*"
 
 
 def context_line(doc):
@@ -15,6 +19,31 @@ def context_line(doc):
     status = doc.get("status", "complete")
     return (f"{where}, LP_NUM_THREADS={ctx['lp_num_threads']}, {ctx['cpu_cores']} cores, {ctx['date_utc']}, "
             f"commit {ctx['git_commit']}" + ("" if status == "complete" else f"  [{status}]"))
+
+
+def method_names(doc):
+    """Methods in registry order (the results list them), then any others the points name."""
+    names = [m["name"] for m in doc.get("methods", [])]
+    for p in doc.get("points", []):
+        if p["method"] not in names:
+            names.append(p["method"])
+    return names
+
+
+def method_colours(doc):
+    """One colour per method, in registry order."""
+    names = method_names(doc)
+    cmap = plt.get_cmap("tab10" if len(names) <= 10 else "tab20")
+    return {name: cmap(i % cmap.N) for i, name in enumerate(names)}
+
+
+def markers_for(values):
+    """One marker per distinct value, in first-seen order."""
+    out = {}
+    for v in values:
+        if v not in out:
+            out[v] = MARKER_CYCLE[len(out) % len(MARKER_CYCLE)]
+    return out
 
 
 def save(fig, prefix):

@@ -22,14 +22,20 @@ import sys
 import bokehplot
 import matplotlib.pyplot as plt
 
-MARKERS = {"f32": "o", "f16": "s", "r11g11b10f": "^", "unorm10_bracketed": "D", "unorm16_bracketed": "P"}
 SCALE_COLOURS = {1: "#1f77b4", 2: "#ff7f0e", 4: "#2ca02c"}
-PRECISION_COLOURS = {"f32": "#1f77b4", "f16": "#d62728", "r11g11b10f": "#9467bd",
-                     "unorm10_bracketed": "#2ca02c", "unorm16_bracketed": "#ff7f0e"}
+
+
+def mib(p):
+    """The point's FLAG buffers as allocated (3D image from the driver, plus bracket and low-res buffers)."""
+    return p["memory"]["bytes"] / 2**20
+
+
+def rmse(p, reference="vs_flag_f32"):
+    return p["error"][reference]["rmse"]
 
 
 def rmse_floor(points):
-    positive = [p["error"]["rmse"] for p in points if p["error"]["rmse"] > 0]
+    positive = [rmse(p) for p in points if rmse(p) > 0]
     return min(positive) / 10 if positive else 1e-8
 
 
@@ -46,6 +52,10 @@ def main(doc, prefix):
     floor = rmse_floor(points)
     budgets = cfg.get("budget_lines_mib", [64, 16])
     largest_n = max(cfg["sizes"])
+    precisions = list(dict.fromkeys(p["precision"] for p in points))
+    scales = sorted({p["buffer_scale"] for p in points})
+    MARKERS = bokehplot.markers_for(precisions)
+    PRECISION_COLOURS = {name: plt.get_cmap("tab10")(i) for i, name in enumerate(precisions)}
 
     fig = plt.figure(figsize=(max(15, 4.6 * len(resolutions)), 9.8), constrained_layout=True)
     outer = fig.add_gridspec(2, 1)
@@ -53,34 +63,34 @@ def main(doc, prefix):
     for i, res in enumerate(resolutions):
         ax = fig.add_subplot(top[0, i])
         for p in (p for p in points if res_key(p) == res):
-            err = p["error"]["rmse"]
-            colour = SCALE_COLOURS.get(p["scale"], "k")
+            err = rmse(p)
+            colour = SCALE_COLOURS.get(p["buffer_scale"], "k")
             filled = p["N"] == largest_n
-            ax.scatter(p["buffer"]["allocated_mib"], err if err > 0 else floor, marker=MARKERS.get(p["precision"], "o"),
+            ax.scatter(mib(p), err if err > 0 else floor, marker=MARKERS.get(p["precision"], "o"),
                        s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2, zorder=3)
             if err == 0:
-                ax.annotate("exact", (p["buffer"]["allocated_mib"], floor), fontsize=7, xytext=(3, 3),
+                ax.annotate("exact", (mib(p), floor), fontsize=7, xytext=(3, 3),
                             textcoords="offset points")
-        for s in (s for s in skipped if res_key(s) == res and "buffer" in s):
-            ax.scatter(s["buffer"]["allocated_mib"], floor, marker="x", color="0.6", s=30, zorder=2)
-        for mib in budgets:
-            ax.axvline(mib, color="0.3", ls=":", lw=1)
-            ax.annotate(f"{mib:g} MiB", (mib, 1), xycoords=("data", "axes fraction"), fontsize=7, rotation=90,
+        for s in (s for s in skipped if res_key(s) == res and s["memory"]):
+            ax.scatter(mib(s), floor, marker="x", color="0.6", s=30, zorder=2)
+        for budget in budgets:
+            ax.axvline(budget, color="0.3", ls=":", lw=1)
+            ax.annotate(f"{budget:g} MiB", (budget, 1), xycoords=("data", "axes fraction"), fontsize=7, rotation=90,
                         va="top", ha="right")
         if cfg.get("max_buffer_mb"):
             ax.axvline(cfg["max_buffer_mb"], color="#d62728", ls="--", lw=0.8)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_title(f"{res[0]}x{res[1]}: error vs 3D-buffer size", fontsize=10)
-        ax.set_xlabel("3D buffer (MiB, driver's allocation)")
+        ax.set_xlabel("FLAG buffers (MiB, driver's allocation)")
         if i == 0:
             ax.set_ylabel("RMSE vs full-res f32 FLAG (linear RGB)")
         ax.grid(True, which="both", alpha=0.25)
     # Legend: markers = precision, colours = scale, fill = N.
     handles = [plt.Line2D([], [], ls="", marker=m, color="0.2", label=name) for name, m in MARKERS.items()
-               if name in cfg["precisions"]]
+               if name in precisions]
     handles += [plt.Line2D([], [], ls="", marker="o", color=c, label=f"scale 1/{s}") for s, c in SCALE_COLOURS.items()
-                if s in cfg["scales"]]
+                if s in scales]
     handles += [plt.Line2D([], [], ls="", marker="o", markerfacecolor="none", color="0.2", label="N < " + str(largest_n)),
                 plt.Line2D([], [], ls="", marker="x", color="0.6", label="skipped (over --max-buffer-mb)")]
     fig.axes[0].legend(handles=handles, fontsize=7, loc="lower left")
@@ -90,17 +100,17 @@ def main(doc, prefix):
     big = with_data[-1] if with_data else resolutions[-1]
     ax = fig.add_subplot(bottom[0, 0])
     def series(precision, scale):
-        return sorted((p for p in points if res_key(p) == big and p["precision"] == precision and p["scale"] == scale),
+        return sorted((p for p in points if res_key(p) == big and p["precision"] == precision and p["buffer_scale"] == scale),
                       key=lambda p: p["N"])
-    for precision in cfg["precisions"]:
+    for precision in precisions:
         pts = series(precision, 1)
         if pts:
-            ax.plot([p["N"] for p in pts], [max(p["error"]["rmse"], floor) for p in pts], ls="-",
+            ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="-",
                     marker=MARKERS.get(precision, "o"), color=PRECISION_COLOURS.get(precision), label=f"{precision} 1/1")
     for scale, grey in ((2, "0.45"), (4, "0.7")):
         pts = series("f32", scale)
         if pts:
-            ax.plot([p["N"] for p in pts], [max(p["error"]["rmse"], floor) for p in pts], ls="--", marker=".",
+            ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="--", marker=".",
                     color=grey, label=f"f32 1/{scale} (resolution alone)")
     ax.set_yscale("log")
     ax.set_xlabel(f"gather size N (k = {cfg['spacing_px']} px; max CoC radius k(N-1)/2)")
@@ -111,41 +121,38 @@ def main(doc, prefix):
 
     # Against the exact scatter, for context: full-res FLAG's own error (its k-px sample grid) as a line.
     ax = fig.add_subplot(bottom[0, 1])
-    exact_points = [p for p in points if res_key(p) == big and p.get("error_vs_exact")]
+    exact_points = [p for p in points if res_key(p) == big]
     for p in exact_points:
-        colour = SCALE_COLOURS.get(p["scale"], "k")
+        colour = SCALE_COLOURS.get(p["buffer_scale"], "k")
         filled = p["N"] == largest_n
-        ax.scatter(p["buffer"]["allocated_mib"], p["error_vs_exact"]["rmse"], marker=MARKERS.get(p["precision"], "o"),
+        ax.scatter(mib(p), rmse(p, "vs_energy_sum"), marker=MARKERS.get(p["precision"], "o"),
                    s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
-    for r in doc.get("references", []):
-        if (r["width_px"], r["height_px"]) == big and r.get("flag_f32_vs_exact"):
-            ax.axhline(r["flag_f32_vs_exact"]["rmse"], color="0.3", ls="--" if r["N"] == largest_n else ":", lw=1,
-                       label=f"full-res f32 FLAG, N = {r['N']}")
-    for mib in budgets:
-        ax.axvline(mib, color="0.3", ls=":", lw=1)
+    for p in exact_points:
+        if p["precision"] == "f32" and p["buffer_scale"] == 1:
+            ax.axhline(rmse(p, "vs_energy_sum"), color="0.3", ls="--" if p["N"] == largest_n else ":", lw=1,
+                       label=f"full-res f32 FLAG, N = {p['N']}")
+    for budget in budgets:
+        ax.axvline(budget, color="0.3", ls=":", lw=1)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("3D buffer (MiB, driver's allocation)")
+    ax.set_xlabel("FLAG buffers (MiB, driver's allocation)")
     ax.set_ylabel("RMSE vs exact scatter (energy sum)")
     ax.set_title(f"{big[0]}x{big[1]}: error vs the exact scatter, for context", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    if exact_points:
-        ax.legend(fontsize=7)
-    else:
-        ax.text(0.5, 0.5, "no exact-scatter errors (--no-exact)", transform=ax.transAxes, ha="center")
+    ax.legend(fontsize=7)
 
     ax = fig.add_subplot(bottom[0, 2])
     for p in (p for p in points if res_key(p) == big):
-        colour = SCALE_COLOURS.get(p["scale"], "k")
+        colour = SCALE_COLOURS.get(p["buffer_scale"], "k")
         filled = p["N"] == largest_n
-        ax.scatter(p["buffer"]["allocated_mib"], p.get("flag_passes_ms", p["frame_ms"]["median"]),
+        ax.scatter(mib(p), p["flag_passes_ms"],
                    marker=MARKERS.get(p["precision"], "o"),
                    s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
-    for mib in budgets:
-        ax.axvline(mib, color="0.3", ls=":", lw=1)
+    for budget in budgets:
+        ax.axvline(budget, color="0.3", ls=":", lw=1)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("3D buffer (MiB, driver's allocation)")
+    ax.set_xlabel("FLAG buffers (MiB, driver's allocation)")
     ax.set_ylabel("GPU time of the FLAG passes (ms, medians; frame minus CoC)")
     ax.set_title(f"{big[0]}x{big[1]}: time vs buffer size (markers as above)", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)

@@ -3,30 +3,21 @@
 
 usage: plot_figure9.py FIGURE9_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
 
-Left: linear axes, as in the paper. Right: log-log, where a power law is a straight line and the
-fitted exponent (legend) is its slope. Markers are medians; bars span the interquartile range;
-the pale band spans min..max over repetitions.
+One row per backend (GPU and CPU times differ by orders of magnitude on a real GPU, so each gets
+its own axes). Left: linear axes, as in the paper. Right: log-log, where a power law is a straight
+line and the fitted exponent (legend) is its slope. Markers are medians over the interleaved
+samples; bars span the interquartile range; the pale band spans min..max.
 """
 
 import bokehplot
 import matplotlib.pyplot as plt
 from matplotlib.ticker import NullLocator
 
-STYLE = {  # method -> colour; backend -> line style and marker
-    "naive": "#d62728", "flag": "#1f77b4",
-    "circular1": "#2ca02c", "circular2": "#9467bd", "circular3": "#8c564b",
-    "circular4": "#e377c2", "circular5": "#7f7f7f", "circular6": "#bcbd22",
-}
-BACKEND = {"gpu": ("-", "o"), "cpu": ("--", "s")}
 
-
-def label(series):
+def label(series, point):
     fits = series.get("fits", {})
     fit = fits.get("larger_half") or fits.get("all_sizes")
-    text = f"{series['method']} ({series['backend']}"
-    if series["method"] == "flag":
-        text += f", {series['precision']} layers"
-    text += ")"
+    text = f"{series['method']} ({point['precision']})"
     if fit:
         text += f"  ~N^{fit['exponent']:.2f}"
     return text
@@ -34,35 +25,43 @@ def label(series):
 
 def main(doc, prefix):
     cfg = doc["config"]
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
-    for ax, loglog in zip(axes, (False, True)):
-        for s in doc["series"]:
-            pts = s["points"]
-            if not pts:
-                continue
-            n = [p["N"] for p in pts]
-            med = [p["frame_ms"]["median"] for p in pts]
-            lo = [p["frame_ms"]["median"] - p["frame_ms"]["q1"] for p in pts]
-            hi = [p["frame_ms"]["q3"] - p["frame_ms"]["median"] for p in pts]
-            colour = STYLE.get(s["method"], None)
-            ls, marker = BACKEND.get(s["backend"], ("-", "o"))
-            ax.errorbar(n, med, yerr=[lo, hi], color=colour, ls=ls, marker=marker, ms=4, capsize=3, label=label(s))
-            ax.fill_between(n, [p["frame_ms"]["min"] for p in pts], [p["frame_ms"]["max"] for p in pts],
-                            color=colour, alpha=0.12, lw=0)
-        ax.set_xlabel(f"gather pattern size N (N x N samples at k = {cfg['spacing_px']} px; max CoC radius = k(N-1)/2)")
-        ax.set_ylabel("frame time (ms, median; bars: IQR, band: min-max)")
-        ax.grid(True, which="both", alpha=0.3)
-        if loglog:
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            ax.set_xticks(cfg["sizes"], [str(n) for n in cfg["sizes"]])
-            ax.xaxis.set_minor_locator(NullLocator())
-            ax.set_title("log-log: slope = growth exponent (fit over the larger half of N)")
-        else:
-            ax.set_title("Frame time vs filter size (cf. FLAG paper Fig. 9)")
-            ax.set_ylim(bottom=0)
-    axes[0].legend(fontsize=8, loc="upper left")
-    fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}: {bokehplot.context_line(doc)}", fontsize=9)
+    colours = bokehplot.method_colours(doc)
+    backends = [b for b in ("gpu", "cpu") if any(s["backend"] == b for s in doc["series"])]
+    if not backends:
+        raise SystemExit("no measured points to plot")
+    fig, axes = plt.subplots(len(backends), 2, figsize=(13, 4.8 * len(backends)), constrained_layout=True,
+                             squeeze=False)
+    device = (doc["context"].get("device") or {}).get("name", "")
+    for row, backend in zip(axes, backends):
+        for ax, loglog in zip(row, (False, True)):
+            order = bokehplot.method_names(doc)
+            for s in sorted((s for s in doc["series"] if s["backend"] == backend), key=lambda s: order.index(s["method"])):
+                pts = sorted((p for p in doc["points"] if p["method"] == s["method"] and p["backend"] == backend),
+                             key=lambda p: p["N"])
+                n = [p["N"] for p in pts]
+                med = [p["frame_ms"]["median"] for p in pts]
+                lo = [p["frame_ms"]["median"] - p["frame_ms"]["q1"] for p in pts]
+                hi = [p["frame_ms"]["q3"] - p["frame_ms"]["median"] for p in pts]
+                colour = colours[s["method"]]
+                ax.errorbar(n, med, yerr=[lo, hi], color=colour, marker="o", ms=4, capsize=3, label=label(s, pts[0]))
+                ax.fill_between(n, [p["frame_ms"]["min"] for p in pts], [p["frame_ms"]["max"] for p in pts],
+                                color=colour, alpha=0.12, lw=0)
+            ax.set_xlabel(f"gather size N (N x N samples at k = {cfg['spacing_px']} px; max CoC radius = k(N-1)/2)")
+            ax.set_ylabel("frame time (ms, median; bars: IQR, band: min-max)")
+            ax.grid(True, which="both", alpha=0.3)
+            where = f"GPU ({device})" if backend == "gpu" else "CPU references"
+            if loglog:
+                ax.set_xscale("log")
+                ax.set_yscale("log")
+                ax.set_xticks(cfg["sizes"], [str(n) for n in cfg["sizes"]])
+                ax.xaxis.set_minor_locator(NullLocator())
+                ax.set_title(f"{where}, log-log: slope = growth exponent (fit: larger half of N)", fontsize=9)
+            else:
+                ax.set_title(f"{where}: frame time vs filter size (cf. FLAG paper Fig. 9)", fontsize=9)
+                ax.set_ylim(bottom=0)
+        row[0].legend(fontsize=8, loc="upper left")
+    fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, measured interleaved "
+                 f"({doc['measurement']['rounds']} rounds): {bokehplot.context_line(doc)}", fontsize=9)
     bokehplot.save(fig, prefix)
 
 

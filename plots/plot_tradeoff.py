@@ -4,8 +4,9 @@
 usage: plot_tradeoff.py TRADEOFF_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
 
 x: median frame time (log scale; bars span the interquartile range). y: PSNR against the exact
-energy-sum scatter (higher is better). Colour: method; marker: intermediate precision; hollow
-markers: FLAG with a half- or quarter-resolution buffer (marker size shrinks with the scale). The
+energy-sum scatter (higher is better). Colour: method (registry order); marker: intermediate
+precision; hollow markers: intermediates at reduced resolution (marker size shrinks with the
+scale). The
 staircase joins the Pareto front, labelled: for a time budget on the x axis, the best accuracy any
 configuration offers. Exact results (PSNR infinite) sit on the dotted line at the top.
 """
@@ -14,11 +15,13 @@ import bokehplot
 import matplotlib.pyplot as plt
 from matplotlib.lines import Line2D
 
-COLOURS = {"naive": "#d62728", "flag": "#1f77b4", "circular1": "#2ca02c", "circular2": "#9467bd",
-           "circular3": "#8c564b", "circular4": "#e377c2", "circular5": "#7f7f7f", "circular6": "#bcbd22"}
-MARKERS = {"f32": "o", "f16": "s", "bracketed10": "^", "r11g11b10f": "v", "unorm10_bracketed": "D",
-           "unorm16_bracketed": "P"}
 SIZE = {1: 8, 2: 6.5, 4: 5}
+
+
+def short_id(c):
+    """The id without what every point of this plot shares (backend, scene, resolution)."""
+    parts = c["id"].split("/")
+    return "/".join([parts[0]] + parts[4:])
 
 
 def psnr_of(c, cap):
@@ -29,15 +32,17 @@ def psnr_of(c, cap):
 def main(doc, prefix):
     cfg = doc["config"]
     # A result with inf/NaN has no metrics (all null): it cannot be placed, so it is counted instead.
-    configs = [c for c in doc["configurations"] if c["error"]["vs_energy_sum"]["rmse"] is not None]
-    unplaced = len(doc["configurations"]) - len(configs)
+    configs = [c for c in doc["points"] if c["error"]["vs_energy_sum"]["rmse"] is not None]
+    unplaced = len(doc["points"]) - len(configs)
+    COLOURS = bokehplot.method_colours(doc)
+    MARKERS = bokehplot.markers_for(c["precision"] for c in doc["points"])
     finite = [c["error"]["vs_energy_sum"]["psnr_db"] for c in configs
               if c["error"]["vs_energy_sum"]["psnr_db"] is not None]
     cap = (max(finite) + 5) if finite else 60
     fig, ax = plt.subplots(figsize=(13, 6.5), constrained_layout=True)
     for c in configs:
         t = c["frame_ms"]
-        scale = c.get("buffer_scale", 1)
+        scale = c["buffer_scale"]
         colour = COLOURS.get(c["method"], "k")
         ax.errorbar([t["median"]], [psnr_of(c, cap)], xerr=[[t["median"] - t["q1"]], [t["q3"] - t["median"]]],
                     color=colour, marker=MARKERS.get(c["precision"], "o"), ms=SIZE.get(scale, 5), capsize=2,
@@ -54,7 +59,7 @@ def main(doc, prefix):
             ys.append(psnr_of(c, cap))
         ax.plot(xs, ys, color="black", lw=1.2, alpha=0.6)
         for c in front:
-            ax.annotate(f"{c['id']}\n{c['frame_ms']['median']:.1f} ms, {psnr_of(c, cap):.1f} dB",
+            ax.annotate(f"{short_id(c)}\n{c['frame_ms']['median']:.1f} ms, {psnr_of(c, cap):.1f} dB",
                         (c["frame_ms"]["median"], psnr_of(c, cap)), textcoords="offset points", xytext=(6, -18),
                         fontsize=7)
     if len(finite) < len(configs):
@@ -69,8 +74,9 @@ def main(doc, prefix):
     precisions = [p for p in MARKERS if any(c["precision"] == p for c in configs)]
     handles = [Line2D([], [], color=COLOURS[m], marker="o", ls="none", label=m) for m in methods]
     handles += [Line2D([], [], color="grey", marker=MARKERS[p], ls="none", label=p) for p in precisions]
-    handles += [Line2D([], [], color="grey", marker="o", mfc="none", ls="none", ms=SIZE[s], label=f"FLAG buffer 1/{s}")
-                for s in (2, 4) if any(c.get("buffer_scale", 1) == s for c in configs)]
+    handles += [Line2D([], [], color="grey", marker="o", mfc="none", ls="none", ms=SIZE.get(s, 5),
+                       label=f"intermediates at 1/{s} resolution")
+                for s in sorted({c["buffer_scale"] for c in configs} - {1})]
     handles.append(Line2D([], [], color="black", alpha=0.6, label="Pareto front"))
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="colour / marker")
     ax.set_title(f"Speed vs accuracy: {cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, max CoC {cfg['max_coc_px']} px, "

@@ -3,11 +3,9 @@
 // propagation of the circular filters' vertical pass.
 #include <algorithm>
 #include <cmath>
-#include <complex>
 #include <random>
 #include <vector>
 
-#include "circular_coefficients.hpp"
 #include "image.hpp"
 
 namespace bokeh::test {
@@ -56,19 +54,6 @@ inline double half_plateau_radius(const Image& img, int channel, int cx, int cy,
     }
   }
   return sum / 4;
-}
-
-// Worst-case blurred-channel error of a circular filter when every stored real (imaginary) part of
-// component c is off by at most err_re[c] (err_im[c]): the vertical pass computes
-// sum_j Hre (wr Fr + wi Fi) + Him (wi Fr - wr Fi).
-inline double propagate(const CircularKernel& k, const std::vector<double>& err_re, const std::vector<double>& err_im) {
-  double bound = 0.0;
-  for (int c = 0; c < k.components; ++c)
-    for (std::complex<float> f : k.taps[c]) {
-      const double wr = k.weight_real[c], wi = k.weight_imag[c];
-      bound += err_re[c] * std::abs(wr * f.real() + wi * f.imag()) + err_im[c] * std::abs(wi * f.real() - wr * f.imag());
-    }
-  return bound;
 }
 
 }  // namespace bokeh::test

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "vk_check.hpp"
 
 namespace bokeh::vk {
@@ -13,11 +15,19 @@ constexpr std::uint32_t kLocalSizeXId = 100, kLocalSizeYId = 101;
 
 }  // namespace
 
-ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
-                                 std::vector<VkDescriptorType> bindings, std::uint32_t push_constant_bytes,
-                                 std::vector<std::int32_t> specialization)
-    : ctx_(ctx), push_constant_bytes_(push_constant_bytes) {
-  const VkDevice device = ctx.device();
+struct PipelineObjects {
+  Handle<VkDescriptorSetLayout> set_layout;
+  Handle<VkPipelineLayout> layout;
+  Handle<VkPipeline> pipeline;
+};
+
+namespace {
+
+std::shared_ptr<PipelineObjects> create_pipeline(VkDevice device, std::span<const std::uint32_t> spirv,
+                                                 const std::vector<VkDescriptorType>& bindings,
+                                                 std::uint32_t push_constant_bytes,
+                                                 const std::vector<std::int32_t>& values) {
+  auto objects = std::make_shared<PipelineObjects>();
   std::vector<VkDescriptorSetLayoutBinding> layout_bindings;
   for (std::uint32_t i = 0; i < bindings.size(); ++i)
     layout_bindings.push_back({i, bindings[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
@@ -26,7 +36,8 @@ ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> sp
   set_info.pBindings = layout_bindings.data();
   VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
   VK_CHECK(vkCreateDescriptorSetLayout(device, &set_info, nullptr, &set_layout));
-  set_layout_ = {set_layout, [device](VkDescriptorSetLayout l) { vkDestroyDescriptorSetLayout(device, l, nullptr); }};
+  objects->set_layout = {set_layout,
+                         [device](VkDescriptorSetLayout l) { vkDestroyDescriptorSetLayout(device, l, nullptr); }};
 
   const VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes};
   VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
@@ -36,7 +47,7 @@ ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> sp
   layout_info.pPushConstantRanges = &range;
   VkPipelineLayout layout = VK_NULL_HANDLE;
   VK_CHECK(vkCreatePipelineLayout(device, &layout_info, nullptr, &layout));
-  layout_ = {layout, [device](VkPipelineLayout l) { vkDestroyPipelineLayout(device, l, nullptr); }};
+  objects->layout = {layout, [device](VkPipelineLayout l) { vkDestroyPipelineLayout(device, l, nullptr); }};
 
   VkShaderModuleCreateInfo module_info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   module_info.codeSize = spirv.size_bytes();
@@ -45,14 +56,12 @@ ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> sp
   VK_CHECK(vkCreateShaderModule(device, &module_info, nullptr, &module));
   Handle<VkShaderModule> module_owner(module, [device](VkShaderModule m) { vkDestroyShaderModule(device, m, nullptr); });
 
-  // Specialization: user constants at ids 0.., then the workgroup size.
-  std::vector<std::int32_t> values = specialization;
-  values.push_back(static_cast<std::int32_t>(local_size_x_));
-  values.push_back(static_cast<std::int32_t>(local_size_y_));
+  // values: user constants at ids 0.., then the workgroup size at kLocalSizeXId, kLocalSizeYId.
   std::vector<VkSpecializationMapEntry> entries;
-  for (std::uint32_t i = 0; i < specialization.size(); ++i) entries.push_back({i, i * 4u, 4});
-  entries.push_back({kLocalSizeXId, static_cast<std::uint32_t>(specialization.size()) * 4u, 4});
-  entries.push_back({kLocalSizeYId, static_cast<std::uint32_t>(specialization.size() + 1) * 4u, 4});
+  const auto user = static_cast<std::uint32_t>(values.size() - 2);
+  for (std::uint32_t i = 0; i < user; ++i) entries.push_back({i, i * 4u, 4});
+  entries.push_back({kLocalSizeXId, user * 4u, 4});
+  entries.push_back({kLocalSizeYId, (user + 1) * 4u, 4});
   VkSpecializationInfo spec{static_cast<std::uint32_t>(entries.size()), entries.data(), values.size() * 4, values.data()};
 
   VkComputePipelineCreateInfo pipeline_info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
@@ -64,7 +73,27 @@ ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> sp
   pipeline_info.layout = layout;
   VkPipeline pipeline = VK_NULL_HANDLE;
   VK_CHECK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &pipeline_info, nullptr, &pipeline));
-  pipeline_ = {pipeline, [device](VkPipeline p) { vkDestroyPipeline(device, p, nullptr); }};
+  objects->pipeline = {pipeline, [device](VkPipeline p) { vkDestroyPipeline(device, p, nullptr); }};
+  return objects;
+}
+
+}  // namespace
+
+ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
+                                 std::vector<VkDescriptorType> bindings, std::uint32_t push_constant_bytes,
+                                 std::vector<std::int32_t> specialization)
+    : ctx_(ctx), push_constant_bytes_(push_constant_bytes) {
+  const VkDevice device = ctx.device();
+  std::vector<std::int32_t> values = specialization;
+  values.push_back(static_cast<std::int32_t>(local_size_x_));
+  values.push_back(static_cast<std::int32_t>(local_size_y_));
+  std::string key = fmt::format("{}:{}:{}:", static_cast<const void*>(spirv.data()), spirv.size(), push_constant_bytes);
+  for (VkDescriptorType type : bindings) key += fmt::format("b{}", static_cast<int>(type));
+  for (std::int32_t v : values) key += fmt::format("s{}", v);
+  auto& cached = ctx.pipeline_cache()[key];
+  if (!cached) cached = create_pipeline(device, spirv, bindings, push_constant_bytes, values);
+  shared_ = cached;
+  const VkDescriptorSetLayout set_layout = shared_->set_layout;
 
   std::vector<VkDescriptorPoolSize> sizes;
   for (VkDescriptorType type : bindings) sizes.push_back({type, 1});
@@ -107,10 +136,10 @@ void ComputePipeline::bind(std::uint32_t binding, const StorageImage3D& image) {
 
 void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,
                                std::uint32_t invocations_y) const {
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, shared_->pipeline);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, shared_->layout, 0, 1, &set_, 0, nullptr);
   if (push_constant_bytes_ > 0)
-    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_, push_constants);
+    vkCmdPushConstants(cmd, shared_->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_, push_constants);
   vkCmdDispatch(cmd, (invocations_x + local_size_x_ - 1) / local_size_x_,
                 (invocations_y + local_size_y_ - 1) / local_size_y_, 1);
   VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};

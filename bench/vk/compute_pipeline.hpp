@@ -1,7 +1,9 @@
 #pragma once
 // A compute shader with its descriptor set (storage buffers and storage images, in binding
-// order), push constants and integer specialization constants.
+// order), push constants and integer specialization constants. The compiled pipeline is shared
+// through the context's cache; each ComputePipeline owns only its descriptor set.
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -33,9 +35,7 @@ class ComputePipeline {
   Context& ctx_;
   std::uint32_t push_constant_bytes_;
   std::uint32_t local_size_x_ = 8, local_size_y_ = 8;
-  Handle<VkDescriptorSetLayout> set_layout_;
-  Handle<VkPipelineLayout> layout_;
-  Handle<VkPipeline> pipeline_;
+  std::shared_ptr<PipelineObjects> shared_;
   Handle<VkDescriptorPool> pool_;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
 };

@@ -86,7 +86,47 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   return info;
 }
 
+std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) {
+  std::vector<std::string> missing;
+  if (wanted.subgroup_arithmetic) {
+    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    props.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties2(device, &props);
+    if (!(subgroup.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) ||
+        !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
+      missing.push_back("subgroup arithmetic in compute shaders");
+  }
+  for (VkFormat format : wanted.storage_image_3d_formats) {
+    VkImageFormatProperties props{};
+    if (vkGetPhysicalDeviceImageFormatProperties(device, format, VK_IMAGE_TYPE_3D, VK_IMAGE_TILING_OPTIMAL,
+                                                 VK_IMAGE_USAGE_STORAGE_BIT, 0, &props) != VK_SUCCESS)
+      missing.push_back(fmt::format("3D storage images of format {}", static_cast<int>(format)));
+  }
+  if (wanted.graphics_queue) {
+    std::uint32_t count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
+    std::vector<VkQueueFamilyProperties> families(count);
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &count, families.data());
+    if (std::none_of(families.begin(), families.end(), [](const auto& f) {
+          return (f.queueFlags & VK_QUEUE_GRAPHICS_BIT) && (f.queueFlags & VK_QUEUE_COMPUTE_BIT) && f.timestampValidBits;
+        }))
+      missing.push_back("a queue with graphics, compute and timestamps");
+  }
+  std::string text;
+  for (const auto& m : missing) text += (text.empty() ? "" : ", ") + m;
+  return text;
+}
+
 }  // namespace
+
+void DeviceRequirements::add(const DeviceRequirements& other) {
+  subgroup_arithmetic |= other.subgroup_arithmetic;
+  graphics_queue |= other.graphics_queue;
+  for (VkFormat f : other.storage_image_3d_formats)
+    if (std::find(storage_image_3d_formats.begin(), storage_image_3d_formats.end(), f) == storage_image_3d_formats.end())
+      storage_image_3d_formats.push_back(f);
+}
 
 std::vector<DeviceInfo> list_devices() {
   Handle<VkInstance> instance = create_instance();
@@ -96,7 +136,7 @@ std::vector<DeviceInfo> list_devices() {
   return infos;
 }
 
-Context::Context(const std::string& selector) : instance_(create_instance()) {
+Context::Context(const std::string& selector, const DeviceRequirements& wanted) : instance_(create_instance()) {
   const auto devices = physical_devices(instance_);
   if (devices.empty()) throw std::runtime_error("the Vulkan loader reports no devices (is mesa-vulkan-drivers installed?)");
   std::vector<DeviceInfo> infos;
@@ -104,8 +144,10 @@ Context::Context(const std::string& selector) : instance_(create_instance()) {
 
   const DeviceInfo* chosen = nullptr;
   if (selector.empty()) {
-    chosen = &*std::min_element(infos.begin(), infos.end(),
-                                [](const auto& a, const auto& b) { return preference(a) < preference(b); });
+    // By type (a real GPU over lavapipe even if it misses a feature: those methods are skipped with
+    // the reason); among devices of one type, one that meets `wanted`.
+    auto rank = [&](const DeviceInfo& d) { return 2 * preference(d) + (unmet_by(devices[d.index], wanted).empty() ? 0 : 1); };
+    chosen = &*std::min_element(infos.begin(), infos.end(), [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
   } else if (std::all_of(selector.begin(), selector.end(), ::isdigit)) {
     const int index = std::stoi(selector);
     if (index < 0 || index >= static_cast<int>(infos.size()))
@@ -127,8 +169,13 @@ Context::Context(const std::string& selector) : instance_(create_instance()) {
   vkGetPhysicalDeviceQueueFamilyProperties(physical_, &family_count, nullptr);
   std::vector<VkQueueFamilyProperties> families(family_count);
   vkGetPhysicalDeviceQueueFamilyProperties(physical_, &family_count, families.data());
-  auto family = std::find_if(families.begin(), families.end(),
-                             [](const auto& f) { return (f.queueFlags & VK_QUEUE_COMPUTE_BIT) && f.timestampValidBits > 0; });
+  // A queue that also draws where there is one (a method may need graphics), else compute alone.
+  auto family = std::find_if(families.begin(), families.end(), [](const auto& f) {
+    return (f.queueFlags & VK_QUEUE_GRAPHICS_BIT) && (f.queueFlags & VK_QUEUE_COMPUTE_BIT) && f.timestampValidBits > 0;
+  });
+  if (family == families.end())
+    family = std::find_if(families.begin(), families.end(),
+                          [](const auto& f) { return (f.queueFlags & VK_QUEUE_COMPUTE_BIT) && f.timestampValidBits > 0; });
   if (family == families.end())
     throw std::runtime_error(fmt::format("device '{}' has no compute queue with timestamps", info_.name));
   queue_family_ = static_cast<std::uint32_t>(family - families.begin());
@@ -186,6 +233,8 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   VK_CHECK(vkQueueSubmit(queue_, 1, &submit, fence));
   VK_CHECK(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
 }
+
+std::string Context::unmet(const DeviceRequirements& wanted) const { return unmet_by(physical_, wanted); }
 
 std::uint32_t Context::find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted,
                                         VkMemoryPropertyFlags fallback) const {

@@ -3,6 +3,8 @@
 // buffer for synchronous submissions. Everything GPU-side borrows it.
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,11 +33,22 @@ struct DeviceInfo {
 // All devices the loader reports, in the order `--device INDEX` uses.
 std::vector<DeviceInfo> list_devices();
 
+// What a method needs of a device beyond core Vulkan 1.1 compute (Method::device).
+struct DeviceRequirements {
+  bool subgroup_arithmetic = false;                   // subgroupAdd/Max... in compute shaders
+  std::vector<VkFormat> storage_image_3d_formats;     // formats it stores into 3D storage images
+  bool graphics_queue = false;                        // it draws (graphics pipeline on the same queue)
+  void add(const DeviceRequirements& other);          // the union of both
+};
+
+struct PipelineObjects;  // compute_pipeline.cpp: layout and pipeline shared by equal pipelines
+
 class Context {
  public:
-  // selector: "" picks the best (discrete > integrated > virtual > cpu); a number picks that index;
-  // anything else picks the first device whose name contains it. Throws if nothing matches.
-  explicit Context(const std::string& selector = "");
+  // selector: "" picks the best device (discrete > integrated > virtual > cpu) among those meeting
+  // `wanted`, or the best of all when none does; a number picks that index; anything else picks the
+  // first device whose name contains it. Throws if nothing matches.
+  explicit Context(const std::string& selector = "", const DeviceRequirements& wanted = {});
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -48,6 +61,13 @@ class Context {
   // a benchmark wants each frame finished before it reads the timestamps.
   void submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
 
+  // What of `wanted` this device lacks, in words ("" when it has everything).
+  std::string unmet(const DeviceRequirements& wanted) const;
+
+  // Equal pipelines (same SPIR-V, bindings, constants) share one compiled pipeline: a sweep that
+  // re-creates a method's passes neither recompiles nor re-JITs them (lavapipe compiles on first use).
+  std::map<std::string, std::shared_ptr<PipelineObjects>>& pipeline_cache() { return pipeline_cache_; }
+
   std::uint32_t find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted,
                                  VkMemoryPropertyFlags fallback) const;
 
@@ -55,6 +75,7 @@ class Context {
   Handle<VkInstance> instance_;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
   Handle<VkDevice> device_;
+  std::map<std::string, std::shared_ptr<PipelineObjects>> pipeline_cache_;  // destroyed before the device
   VkQueue queue_ = VK_NULL_HANDLE;
   std::uint32_t queue_family_ = 0;
   Handle<VkCommandPool> command_pool_;

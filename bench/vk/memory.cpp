@@ -102,8 +102,8 @@ void download(Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes) {
 }
 
 StorageImage3D::StorageImage3D(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
-                               std::uint32_t depth)
-    : image_(create_image_3d(ctx, format, width, height, depth)) {
+                               std::uint32_t depth) {
+  image_ = create_image_3d(ctx, format, width, height, depth);
   VkMemoryRequirements req{};
   vkGetImageMemoryRequirements(ctx.device(), image_, &req);
   allocated_bytes_ = req.size;

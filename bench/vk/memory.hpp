@@ -20,8 +20,9 @@ class Buffer {
   void* mapped() const { return mapped_; }
 
  private:
-  Handle<VkBuffer> buffer_;
+  // Members die in reverse order: the buffer before the memory bound to it.
   Handle<VkDeviceMemory> memory_;
+  Handle<VkBuffer> buffer_;
   VkDeviceSize bytes_ = 0, allocated_bytes_ = 0;
   void* mapped_ = nullptr;
 };
@@ -41,8 +42,8 @@ class StorageImage3D {
   VkDeviceSize allocated_bytes() const { return allocated_bytes_; }
 
  private:
+  Handle<VkDeviceMemory> memory_;  // declared first: destroyed after the image and view bound to it
   Handle<VkImage> image_;
-  Handle<VkDeviceMemory> memory_;
   Handle<VkImageView> view_;
   VkDeviceSize allocated_bytes_ = 0;
 };

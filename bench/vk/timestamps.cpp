@@ -1,18 +1,23 @@
 #include "timestamps.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "vk_check.hpp"
 
 namespace bokeh::vk {
 
-TimestampQueries::TimestampQueries(Context& ctx, std::uint32_t capacity) : ctx_(ctx), capacity_(capacity) {
+TimestampQueries::TimestampQueries(Context& ctx, std::uint32_t capacity) : ctx_(ctx) { reserve(capacity); }
+
+void TimestampQueries::reserve(std::uint32_t stamps) {
+  if (pool_.get() != VK_NULL_HANDLE && stamps <= capacity_) return;
+  capacity_ = std::max(stamps, 2u);
   VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   info.queryType = VK_QUERY_TYPE_TIMESTAMP;
-  info.queryCount = capacity;
+  info.queryCount = capacity_;
   VkQueryPool pool = VK_NULL_HANDLE;
-  VK_CHECK(vkCreateQueryPool(ctx.device(), &info, nullptr, &pool));
-  pool_ = {pool, [d = ctx.device()](VkQueryPool p) { vkDestroyQueryPool(d, p, nullptr); }};
+  VK_CHECK(vkCreateQueryPool(ctx_.device(), &info, nullptr, &pool));
+  pool_ = {pool, [d = ctx_.device()](VkQueryPool p) { vkDestroyQueryPool(d, p, nullptr); }};
 }
 
 void TimestampQueries::begin_frame(VkCommandBuffer cmd) {
@@ -39,6 +44,17 @@ std::vector<PassTime> TimestampQueries::read() const {
     const std::uint64_t delta = (ticks[i + 1] - ticks[i]) & mask;  // wraps correctly within valid bits
     out.push_back({passes_[i], static_cast<double>(delta) * ctx_.info().timestamp_period_ns * 1e-6});
   }
+  return out;
+}
+
+std::vector<PassTime> mean_per_frame(const std::vector<PassTime>& batch, int frames) {
+  std::vector<PassTime> out;
+  for (const auto& p : batch) {
+    auto it = std::find_if(out.begin(), out.end(), [&](const PassTime& o) { return o.pass == p.pass; });
+    if (it == out.end()) out.push_back({p.pass, 0.0}), it = out.end() - 1;
+    it->ms += p.ms;
+  }
+  for (auto& p : out) p.ms /= frames;
   return out;
 }
 

@@ -19,7 +19,11 @@ struct PassTime {
 
 class TimestampQueries {
  public:
-  TimestampQueries(Context& ctx, std::uint32_t capacity);
+  TimestampQueries(Context& ctx, std::uint32_t capacity = 64);
+
+  // Makes room for `stamps` timestamps in one frame (a batch of frames needs passes x frames + 1);
+  // call outside recording.
+  void reserve(std::uint32_t stamps);
 
   void begin_frame(VkCommandBuffer cmd);                       // resets and writes the start stamp
   void end_pass(VkCommandBuffer cmd, const std::string& pass);  // stamp once all prior work is done
@@ -28,11 +32,14 @@ class TimestampQueries {
 
  private:
   Context& ctx_;
-  std::uint32_t capacity_;
+  std::uint32_t capacity_ = 0;
   Handle<VkQueryPool> pool_;
   std::vector<std::string> passes_;
 };
 
 double frame_ms(const std::vector<PassTime>& passes);
+
+// A batch's stamps, summed per pass name (first-seen order) and divided by `frames`.
+std::vector<PassTime> mean_per_frame(const std::vector<PassTime>& batch, int frames);
 
 }  // namespace bokeh::vk

@@ -1,0 +1,83 @@
+#include "gpu_frame.hpp"
+
+#include <algorithm>
+
+#include <cstdint>
+
+#include "vk/spirv.hpp"
+
+namespace bokeh::gpu {
+
+namespace {
+constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+
+std::vector<float> to_rgba(const Image& color) {
+  std::vector<float> rgba(color.pixel_count() * 4, 1.0f);
+  for (std::size_t i = 0; i < color.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) rgba[i * 4 + c] = color.pixels[i * color.channels + c];
+  return rgba;
+}
+}  // namespace
+
+GpuFrame::GpuFrame(vk::Context& context, const Image& color_image, const Image& depth_m, const Lens& lens,
+                   const GatherPattern& pattern)
+    : ctx(context),
+      params{color_image.width, color_image.height, pattern.half(), pattern.spacing_px,
+             static_cast<float>(coc_scale_px(lens, color_image.width)), static_cast<float>(lens.focus_distance_m),
+             pattern.max_radius_px()},
+      color(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "colour buffer")),
+      depth(vk::make_storage_buffer(ctx, depth_m.pixel_count() * 4, "depth buffer")),
+      packed(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "packed CoC buffer")),
+      output(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "output buffer")),
+      coc_pass(ctx, vk::spirv("common/coc"), {kBuffer, kBuffer, kBuffer}, sizeof(PassParams)) {
+  validate(lens);
+  validate(pattern);
+  const auto rgba = to_rgba(color_image);
+  vk::upload(ctx, color, rgba.data(), rgba.size() * sizeof(float));
+  vk::upload(ctx, depth, depth_m.pixels.data(), depth_m.pixels.size() * sizeof(float));
+  coc_pass.bind(0, color);
+  coc_pass.bind(1, depth);
+  coc_pass.bind(2, packed);
+}
+
+Image GpuFrame::read_output() {
+  std::vector<float> rgba(static_cast<std::size_t>(width()) * height() * 4);
+  vk::download(ctx, output, rgba.data(), rgba.size() * sizeof(float));
+  Image out(params.width_px, params.height_px, 3);
+  for (std::size_t i = 0; i < out.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) out.pixels[i * 3 + c] = rgba[i * 4 + c];
+  return out;
+}
+
+Image GpuFrame::read_packed() {
+  Image out(params.width_px, params.height_px, 4);
+  vk::download(ctx, packed, out.pixels.data(), out.pixels.size() * sizeof(float));
+  return out;
+}
+
+std::vector<vk::PassTime> run_frames(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer, int frames) {
+  frame.ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    timer.begin_frame(cmd);
+    for (int f = 0; f < frames; ++f) {
+      frame.coc_pass.dispatch(cmd, &frame.params, frame.width(), frame.height());
+      timer.end_pass(cmd, "coc");
+      filter.record(cmd, timer);
+    }
+  });
+  return vk::mean_per_frame(timer.read(), frames);
+}
+
+PassWork coc_pass_work(const GatherPattern& pattern, int width_px, int height_px) {
+  const double pixels = static_cast<double>(width_px) * height_px;
+  return {"coc", pixels * pattern.size_n, pixels * 20, pixels * 16};
+}
+
+void warm_up(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer) {
+  const PassParams full = frame.params;
+  frame.params.width_px = std::min(full.width_px, 16);
+  frame.params.height_px = std::min(full.height_px, 16);
+  run_frames(frame, filter, timer);
+  frame.params = full;
+}
+
+}  // namespace bokeh::gpu

@@ -1,0 +1,63 @@
+#pragma once
+// What every GPU filter shares: the scene uploaded once, the CoC pass writing the packed input,
+// and the output buffer. A filter adds its own passes after the CoC pass.
+#include <memory>
+#include <string>
+
+#include "coc.hpp"
+#include "gather_pattern.hpp"
+#include "image.hpp"
+#include "lens.hpp"
+#include "vk/compute_pipeline.hpp"
+#include "vk/context.hpp"
+#include "vk/memory.hpp"
+#include "vk/timestamps.hpp"
+#include "work.hpp"
+
+namespace bokeh::gpu {
+
+// Mirrors `Params` in shaders/common/common.glsl.
+struct PassParams {
+  std::int32_t width_px, height_px, half_n, spacing_px;
+  float coc_scale_px, focus_m, max_radius_px;
+};
+
+class GpuFrame {
+ public:
+  GpuFrame(vk::Context& ctx, const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern);
+
+  vk::Context& ctx;
+  PassParams params;
+  vk::Buffer color;   // vec4 per pixel (rgb, 1)
+  vk::Buffer depth;   // float per pixel, metres
+  vk::Buffer packed;  // vec4 (rgb / discrete disc area, radius px), written by the CoC pass
+  vk::Buffer output;  // vec4 (rgb, 1), written by the filter's last pass
+  vk::ComputePipeline coc_pass;
+
+  std::uint32_t width() const { return static_cast<std::uint32_t>(params.width_px); }
+  std::uint32_t height() const { return static_cast<std::uint32_t>(params.height_px); }
+  Image read_output();  // RGB
+  Image read_packed();  // RGBA as the CoC pass wrote it
+};
+
+class GpuFilter {
+ public:
+  virtual ~GpuFilter() = default;
+  // Records the filter's passes after the CoC pass, stamping each with `timer.end_pass`.
+  virtual void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) = 0;
+  // Bytes of intermediate storage the filter allocated (driver's sizes), beyond the shared buffers.
+  virtual std::uint64_t intermediate_bytes() const = 0;
+};
+
+// Runs CoC + filter `frames` times in one timed submission (a batch long enough to swamp launch
+// overhead and timer resolution on a fast GPU) and returns each pass's mean time per frame.
+std::vector<vk::PassTime> run_frames(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer, int frames = 1);
+
+// The CoC pass's work: it reads colour and depth, counts the discrete disc area over the pattern's
+// N columns, and writes the packed input.
+PassWork coc_pass_work(const GatherPattern& pattern, int width_px, int height_px);
+
+// Runs every pipeline once over a tiny region: lavapipe JIT-compiles a pipeline on first use.
+void warm_up(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer);
+
+}  // namespace bokeh::gpu

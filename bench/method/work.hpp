@@ -1,0 +1,15 @@
+#pragma once
+#include <string>
+
+namespace bokeh {
+
+// The work one frame of a pass does, by the method's model (not timed, so it compares exactly across
+// runs; a change is an algorithmic change): throughput is this over the pass's measured time.
+struct PassWork {
+  std::string pass;          // the timestamp name of the pass
+  double taps = 0;           // input samples evaluated (the pattern's, for pixels inside the image)
+  double bytes_read = 0;     // compulsory traffic: every buffer the pass reads, once
+  double bytes_written = 0;  // every buffer the pass writes, once
+};
+
+}  // namespace bokeh

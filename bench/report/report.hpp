@@ -1,0 +1,34 @@
+#pragma once
+// The one JSON writer: every results file is {schema, schema_version, context, ...} and is written
+// atomically (temp file + rename), so an interrupted run never leaves a half-written file.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "vk/context.hpp"
+
+namespace bokeh {
+
+// Bumped when a key changes meaning or disappears; adding keys keeps the version.
+constexpr int kSchemaVersion = 2;  // 2: one point format for every sweep (bench/runner/sweep.cpp)
+
+// Device, driver, machine and build: what a reader needs to trust or compare a number.
+nlohmann::json run_context(const vk::DeviceInfo* device);
+nlohmann::json device_json(const vk::DeviceInfo& device);
+
+// Wraps `body` as {"schema": name, "schema_version", "context", ...body} and writes it atomically.
+void write_results(const std::string& path, const std::string& schema_name, const nlohmann::json& context,
+                   const nlohmann::json& body);
+
+// Writes `text` to `path` through a temporary file beside it and a rename: readers see the old
+// file or the new one, never a part (the temporary's name is unique to this process).
+void write_text_atomically(const std::string& path, const std::string& text);
+
+// Creates the parent directory of `path` if needed.
+void ensure_parent_dir(const std::string& path);
+
+// Runs plots/<script> with Debian's python3 (which has matplotlib): script JSON OUT_PREFIX.
+// Throws if it fails; the results file is already written by then.
+void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix);
+
+}  // namespace bokeh

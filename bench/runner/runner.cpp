@@ -1,0 +1,234 @@
+#include "runner.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <list>
+#include <numeric>
+#include <random>
+
+namespace bokeh::runner {
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+std::atomic<std::int64_t> g_first_signal_ms{0};
+
+std::int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+extern "C" void on_signal(int) {
+  // `timeout -s INT` and a terminal's Ctrl-C reach the process and its group, sometimes twice at
+  // once: only a second signal well after the first means "stop now".
+  const std::int64_t t = now_ms();
+  std::int64_t first = 0;
+  if (g_first_signal_ms.compare_exchange_strong(first, t)) {
+    g_interrupted = true;
+    return;
+  }
+  if (t - first > 1000) std::_Exit(130);
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+InterruptScope::InterruptScope() {
+  g_interrupted = false;
+  g_first_signal_ms = 0;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+}
+
+InterruptScope::~InterruptScope() {
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  g_interrupted = false;  // the run that saw it has recorded it in its status
+}
+
+bool interrupted() { return g_interrupted; }
+void request_interrupt() { g_interrupted = true; }
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(pos));
+  const auto hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (v[hi] - v[lo]) * (pos - static_cast<double>(lo));
+}
+
+Distribution distribution(const std::vector<double>& v) {
+  Distribution d;
+  if (v.empty()) return d;
+  double sum = 0, sq = 0;
+  for (double x : v) sum += x, sq += x * x;
+  d.mean = sum / static_cast<double>(v.size());
+  d.stddev = std::sqrt(std::max(0.0, sq / static_cast<double>(v.size()) - d.mean * d.mean));
+  d.median = quantile(v, 0.5), d.q1 = quantile(v, 0.25), d.q3 = quantile(v, 0.75);
+  d.min = *std::min_element(v.begin(), v.end()), d.max = *std::max_element(v.begin(), v.end());
+  return d;
+}
+
+std::vector<double> PointRecord::frame_ms() const {
+  std::vector<double> out;
+  for (const auto& s : samples) out.push_back(s.frame_ms);
+  return out;
+}
+
+namespace {
+
+// Frames per sample from a pilot frame's time.
+int frames_for(double pilot_ms, const Policy& p) {
+  if (!(pilot_ms > 0)) return p.max_frames_per_sample;
+  return std::clamp(static_cast<int>(std::ceil(p.sample_min_ms / pilot_ms)), 1, p.max_frames_per_sample);
+}
+
+// Warms up, then runs single frames while they still get faster by more than 3% (clocks ramping
+// up), as long as they are short; returns the last frame's time.
+double warm_up(Target& target, const Policy& p, PointRecord& rec) {
+  const auto start = std::chrono::steady_clock::now();
+  target.warm_up();
+  double best = target.measure(1).frame_ms;
+  rec.warm_up_ms.push_back(best);
+  double last = best;
+  int not_falling = 0;
+  while (last < p.sample_min_ms && not_falling < 2 && seconds_since(start) < p.warm_up_max_s) {
+    last = target.measure(1).frame_ms;
+    rec.warm_up_ms.push_back(last);
+    if (last < 0.97 * best) not_falling = 0; else ++not_falling;
+    best = std::min(best, last);
+  }
+  return last;
+}
+
+bool settled(const PointRecord& r, const Policy& p) {
+  if (static_cast<int>(r.samples.size()) >= p.max_samples) return true;
+  if (static_cast<int>(r.samples.size()) < p.min_samples) return false;
+  return distribution(r.frame_ms()).relative_iqr() <= p.settled_relative_iqr;
+}
+
+}  // namespace
+
+RunRecord run(const std::vector<std::string>& names, const std::vector<std::string>& skip, const Policy& policy,
+              Hooks& hooks) {
+  const auto start = std::chrono::steady_clock::now();
+  RunRecord record;
+  std::vector<std::size_t> active;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    PointRecord r;
+    r.name = names[i];
+    r.skipped = i < skip.size() ? skip[i] : "";
+    if (r.skipped.empty()) active.push_back(i);
+    record.points.push_back(std::move(r));
+  }
+  std::mt19937_64 rng(policy.seed);
+  std::map<std::size_t, std::unique_ptr<Target>> live;
+  std::list<std::size_t> recency;  // least recently visited first
+  std::vector<double> last_visit_s(names.size(), 0.0);
+  std::size_t visits = 0;
+
+  auto drop = [&](std::size_t i) {
+    live.erase(i);
+    recency.remove(i);
+  };
+  auto make_room = [&](std::size_t keep) {
+    auto resident = [&] {
+      std::uint64_t sum = 0;
+      for (const auto& [i, t] : live) sum += t->resident_bytes();
+      return sum;
+    };
+    while (resident() > policy.resident_limit_bytes && live.size() > 1) {
+      const auto victim = std::find_if(recency.begin(), recency.end(), [&](std::size_t i) { return i != keep; });
+      if (victim == recency.end()) break;
+      drop(*victim);
+    }
+  };
+  auto skip_point = [&](std::size_t i, const std::string& why) {
+    record.points[i].skipped = why;
+    drop(i);
+  };
+
+  for (int round = 0; !active.empty() && !interrupted(); ++round) {
+    std::vector<std::size_t> order = active;
+    std::shuffle(order.begin(), order.end(), rng);
+    record.round_order.push_back(order);
+    for (auto& [name, probe] : hooks.probes) {
+      if (round == 0) probe->warm_up();
+      record.probe_ms[name].push_back(probe->measure(1).frame_ms);
+    }
+    for (std::size_t i : order) {
+      if (interrupted()) break;
+      PointRecord& rec = record.points[i];
+      const auto visit_start = std::chrono::steady_clock::now();
+      try {
+        auto it = live.find(i);
+        if (it == live.end()) {
+          auto target = hooks.prepare(i);
+          ++rec.preparations;
+          it = live.emplace(i, std::move(target)).first;
+          if (rec.frames_per_sample == 0) {
+            rec.frames_per_sample = frames_for(warm_up(*it->second, policy, rec), policy);
+            if (hooks.first_ready) hooks.first_ready(i, *it->second);
+          } else {
+            it->second->warm_up();  // freed earlier to save memory: compile caches are warm already
+          }
+          make_room(i);
+        }
+        recency.remove(i);
+        recency.push_back(i);
+        rec.samples.push_back(it->second->measure(rec.frames_per_sample));
+        rec.sample_round.push_back(round);
+      } catch (const std::exception& e) {
+        skip_point(i, e.what());
+      }
+      last_visit_s[i] = seconds_since(visit_start);
+      rec.wall_s += last_visit_s[i];
+      ++visits;
+      if (hooks.checkpoint) {
+        record.elapsed_s = seconds_since(start);
+        hooks.checkpoint(record);
+      }
+      if (hooks.progress) {
+        Progress p;
+        p.round = round;
+        p.visits_done = visits;
+        p.points_total = names.size();
+        p.elapsed_s = seconds_since(start);
+        // Time left: the rounds every point still owes (min_samples), at least; then what the budget
+        // allows, up to max_samples.
+        double round_s = 0;
+        for (std::size_t a : active) round_s += last_visit_s[a];
+        p.points_active = active.size();
+        const double owed = std::max(0, policy.min_samples - round - 1) * round_s;
+        const double most = std::max(0, policy.max_samples - round - 1) * round_s;
+        p.eta_s = std::max(owed, std::min(most, policy.budget_s - p.elapsed_s));
+        hooks.progress(p, rec);
+      }
+    }
+    if (interrupted()) break;
+    std::vector<std::size_t> still;
+    for (std::size_t i : active) {
+      PointRecord& rec = record.points[i];
+      if (!rec.skipped.empty()) continue;
+      rec.settled = settled(rec, policy);
+      if (rec.settled) drop(i); else still.push_back(i);
+    }
+    active = std::move(still);
+    const bool everyone_has_min = std::all_of(active.begin(), active.end(), [&](std::size_t i) {
+      return static_cast<int>(record.points[i].samples.size()) >= policy.min_samples;
+    });
+    if (everyone_has_min && seconds_since(start) >= policy.budget_s) break;
+  }
+  record.status = interrupted() ? "interrupted" : "complete";
+  record.elapsed_s = seconds_since(start);
+  return record;
+}
+
+}  // namespace bokeh::runner

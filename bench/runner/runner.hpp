@@ -1,0 +1,117 @@
+#pragma once
+// The interleaved measuring loop, for any kind of point (it knows nothing of Vulkan or methods).
+//
+// A machine whose speed drifts (a shared VM moved by 1.6x within minutes, a GPU ramping its clocks)
+// biases any comparison of points measured one after the other. So points are measured in rounds:
+// every round visits every unfinished point once, in a fresh shuffled order (recorded), and each
+// visit takes one sample. Every point gets its first sample before any gets its second, and slow
+// drift spreads over all points instead of landing on one method. Probes (the calibration kernels)
+// are timed at the start of every round, so the drift over the run is on record.
+//
+// A point leaves the rounds once it has min_samples and its relative IQR is at most
+// settled_relative_iqr, or at max_samples; rounds stop when no point is left, or when the budget is
+// spent and every point has min_samples.
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace bokeh::runner {
+
+struct Sample {
+  double frame_ms = 0;                    // mean over the sample's frames
+  std::map<std::string, double> pass_ms;  // per pass, mean per frame (GPU timestamps; empty on the CPU)
+};
+
+// A point made ready to measure: its resources allocated and its inputs uploaded.
+class Target {
+ public:
+  virtual ~Target() = default;
+  virtual void warm_up() = 0;                  // before its first sample (JIT compilation, page faults)
+  virtual Sample measure(int frames) = 0;      // `frames` frames back to back
+  virtual std::uint64_t resident_bytes() const { return 0; }  // what it holds while alive
+};
+
+struct Policy {
+  double budget_s = 60;                // measuring time to aim for, all points together
+  int min_samples = 3;
+  int max_samples = 15;
+  double settled_relative_iqr = 0.05;
+  double sample_min_ms = 60;           // a sample runs enough frames to last at least this long
+  int max_frames_per_sample = 256;
+  // Warm-up goes on while successive short frames still get faster (clocks ramping from idle),
+  // for at most this long; frames longer than sample_min_ms warm up with one frame.
+  double warm_up_max_s = 3;
+  std::uint64_t resident_limit_bytes = 4ull << 30;  // live targets beyond this are freed, least recent first
+  std::uint64_t seed = 1;                            // of the shuffled visiting order
+};
+
+struct PointRecord {
+  std::string name;
+  std::string skipped;  // why it was not measured (or stopped being measured); empty when measured
+  int frames_per_sample = 0;
+  std::vector<Sample> samples;
+  std::vector<int> sample_round;   // the round each sample was taken in
+  std::vector<double> warm_up_ms;  // the frame times while warming up, in order
+  int preparations = 0;            // how often it was made ready (more than once: freed to save memory)
+  double wall_s = 0;               // time spent on it, preparation and warm-up included
+  bool settled = false;
+
+  std::vector<double> frame_ms() const;
+};
+
+struct RunRecord {
+  std::vector<PointRecord> points;
+  std::vector<std::vector<std::size_t>> round_order;   // per round, the point indices in visiting order
+  std::map<std::string, std::vector<double>> probe_ms;  // per probe, one time per round
+  std::string status = "partial";                       // partial (running), complete, interrupted
+  double elapsed_s = 0;
+};
+
+struct Progress {
+  int round = 0;  // 0-based
+  std::size_t visits_done = 0, points_active = 0, points_total = 0;
+  double elapsed_s = 0, eta_s = 0;
+};
+
+struct Hooks {
+  // Makes point i ready; an exception skips the point with its text as the reason.
+  std::function<std::unique_ptr<Target>(std::size_t i)> prepare;
+  // Once per point, after its first warm-up (e.g. to read its output and measure its error); an
+  // exception skips the point.
+  std::function<void(std::size_t i, Target& target)> first_ready;
+  // Timed once at the start of every round.
+  std::vector<std::pair<std::string, std::unique_ptr<Target>>> probes;
+  // After every visit, with the record so far (e.g. to write partial results).
+  std::function<void(const RunRecord& record)> checkpoint;
+  // After every visit: where the run stands.
+  std::function<void(const Progress& progress, const PointRecord& visited)> progress;
+};
+
+// names[i] is point i; skip[i], when not empty, keeps it out of the rounds with that reason.
+RunRecord run(const std::vector<std::string>& names, const std::vector<std::string>& skip, const Policy& policy,
+              Hooks& hooks);
+
+// Median, quartiles, min, max, mean and standard deviation of a sample.
+struct Distribution {
+  double median = 0, q1 = 0, q3 = 0, min = 0, max = 0, mean = 0, stddev = 0;
+  double relative_iqr() const { return median > 0 ? (q3 - q1) / median : 0; }
+};
+Distribution distribution(const std::vector<double>& values);
+double quantile(std::vector<double> values, double q);
+
+// SIGINT and SIGTERM (to the process or its whole group) ask a run to stop after the current visit;
+// a second signal more than a second later ends the process at once.
+class InterruptScope {
+ public:
+  InterruptScope();
+  ~InterruptScope();
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+};
+bool interrupted();
+void request_interrupt();  // as a signal would (tests)
+
+}  // namespace bokeh::runner

@@ -1,0 +1,559 @@
+#include "sweep.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "accuracy.hpp"
+#include "calibration.hpp"
+#include "coc.hpp"
+#include "parallel.hpp"
+#include "report.hpp"
+#include "run.hpp"
+
+namespace bokeh {
+
+namespace {
+
+// "AxB" with two positive integers (a resolution WIDTHxHEIGHT, a pattern NxK). Throws
+// std::invalid_argument naming `what` and showing `example` for anything else.
+std::pair<int, int> parse_int_pair(const std::string& text, const std::string& what, const std::string& example) {
+  const auto bad = [&] { return std::invalid_argument(what + " '" + text + "' is not of the form " + example); };
+  const auto x = text.find('x');
+  if (x == std::string::npos) throw bad();
+  auto number = [&](const std::string& part) {
+    if (part.empty() || part.size() > 6 || part.find_first_not_of("0123456789") != std::string::npos) throw bad();
+    return std::stoi(part);
+  };
+  return {number(text.substr(0, x)), number(text.substr(x + 1))};
+}
+
+}  // namespace
+
+std::string Resolution::text() const { return fmt::format("{}x{}", width_px, height_px); }
+
+Resolution parse_resolution(const std::string& text) {
+  const auto [width, height] = parse_int_pair(text, "resolution", "WIDTHxHEIGHT (e.g. 1920x1080)");
+  if (width < 16 || height < 16 || width > 16384 || height > 16384)
+    throw std::invalid_argument("resolution '" + text + "' outside 16..16384 px per side");
+  return {width, height};
+}
+
+GatherPattern parse_pattern(const std::string& text) {
+  const auto [size_n, spacing_px] = parse_int_pair(text, "pattern", "NxK (e.g. 41x2)");
+  const GatherPattern p{size_n, spacing_px};
+  validate(p);
+  return p;
+}
+
+namespace {
+
+template <class T>
+std::vector<T> accepted(const std::vector<T>& wanted, const std::vector<T>& offered, const T& fallback) {
+  std::vector<T> out;
+  for (const T& v : wanted)
+    if (std::find(offered.begin(), offered.end(), v) != offered.end()) out.push_back(v);
+  if (out.empty()) out.push_back(fallback);
+  return out;
+}
+
+// Every combination of a method's options: fixed where the command sets them, swept over their
+// `tradeoff` values where asked, else the default.
+std::vector<std::map<std::string, double>> option_sets(const Method& m, const Axes& axes) {
+  std::vector<std::map<std::string, double>> sets = {{}};
+  for (const auto& spec : m.options) {
+    std::vector<double> values = {spec.default_value};
+    if (auto it = axes.option_values.find(spec.key); it != axes.option_values.end())
+      values = {it->second};
+    else if (axes.sweep_options && !spec.tradeoff.empty())
+      values = spec.tradeoff;
+    std::vector<std::map<std::string, double>> next;
+    for (const auto& set : sets)
+      for (double v : values) {
+        auto s = set;
+        s[spec.key] = v;
+        next.push_back(std::move(s));
+      }
+    sets = std::move(next);
+  }
+  return sets;
+}
+
+std::string point_id(const SweepPoint& p) {
+  const FilterOptions& o = p.options;
+  std::string id = fmt::format("{}/{}/{}/{}/N:{}/k:{}/{}", p.method->name, p.backend, p.scene, p.resolution.text(),
+                               o.pattern.size_n, o.pattern.spacing_px, o.precision);
+  if (o.buffer_scale != 1) id += fmt::format("/scale:1-{}", o.buffer_scale);
+  for (const auto& spec : p.method->options) {
+    const double v = o.number(spec.key);
+    if (v != spec.default_value) id += fmt::format("/{}:{}", spec.key, spec.to_json(v).dump());
+  }
+  return id;
+}
+
+}  // namespace
+
+std::vector<SweepPoint> expand(const Axes& axes) {
+  std::vector<SweepPoint> points;
+  for (const auto& scene : axes.scenes)
+    for (const auto& res : axes.resolutions)
+      for (const auto& name : axes.methods) {
+        const Method& m = find_method(name);
+        std::vector<std::string> precisions =
+            axes.precisions.empty() ? std::vector<std::string>{m.precisions.front()}
+            : axes.precisions == std::vector<std::string>{"all"} ? m.precisions
+                                                                 : accepted(axes.precisions, m.precisions, m.precisions.front());
+        std::vector<int> scales = axes.scales.empty()                ? std::vector<int>{1}
+                                  : axes.scales == std::vector<int>{0} ? m.buffer_scales
+                                                                       : accepted(axes.scales, m.buffer_scales, 1);
+        for (const auto& backend : axes.backends)
+          for (const auto& precision : precisions)
+            for (int scale : scales)
+              for (const auto& values : option_sets(m, axes)) {
+                std::set<float> radii;  // methods that only see the largest radius: one point per radius
+                for (const auto& pattern : axes.patterns) {
+                  if (!m.samples_pattern && !radii.insert(pattern.max_radius_px()).second) continue;
+                  SweepPoint p;
+                  p.method = &m;
+                  p.backend = backend;
+                  p.scene = scene;
+                  p.resolution = res;
+                  p.options = m.defaults(pattern);
+                  p.options.precision = precision;
+                  p.options.buffer_scale = scale;
+                  p.options.values = values;
+                  p.max_coc_px = axes.max_coc_px.value_or(pattern.max_radius_px());
+                  p.id = point_id(p);
+                  points.push_back(std::move(p));
+                }
+              }
+      }
+  return points;
+}
+
+namespace {
+
+// ---- Targets: a method on the GPU (timestamps) and as its CPU reference (wall clock). ----
+
+class GpuTarget final : public runner::Target {
+ public:
+  GpuTarget(vk::Context& ctx, const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o)
+      : frame_(ctx, scene.color, scene.depth_m, lens, o.pattern), filter_(m.make_gpu(frame_, o)), timer_(ctx) {}
+  void warm_up() override { gpu::warm_up(frame_, *filter_, timer_); }
+  runner::Sample measure(int frames) override {
+    timer_.reserve(static_cast<std::uint32_t>(frames * passes_ + 2));
+    const auto passes = gpu::run_frames(frame_, *filter_, timer_, frames);
+    passes_ = static_cast<int>(passes.size());
+    runner::Sample s{vk::frame_ms(passes), {}};
+    for (const auto& p : passes) s.pass_ms[p.pass] = p.ms;
+    return s;
+  }
+  std::uint64_t resident_bytes() const override {
+    return 4ull * frame_.width() * frame_.height() * 16 + filter_->intermediate_bytes();
+  }
+  Image output() { return frame_.read_output(); }
+
+ private:
+  gpu::GpuFrame frame_;
+  std::unique_ptr<gpu::GpuFilter> filter_;
+  vk::TimestampQueries timer_;
+  int passes_ = 16;
+};
+
+class CpuTarget final : public runner::Target {
+ public:
+  CpuTarget(const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o, int threads)
+      : method_(m), scene_(scene), lens_(lens), options_(o), threads_(threads) {}
+  void warm_up() override { output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_); }
+  runner::Sample measure(int frames) override {
+    const auto start = std::chrono::steady_clock::now();
+    for (int f = 0; f < frames; ++f) output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_);
+    return {std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / frames, {}};
+  }
+  const Image& output() const { return output_; }
+
+ private:
+  const Method& method_;
+  const Scene& scene_;
+  Lens lens_;
+  FilterOptions options_;
+  int threads_;
+  Image output_;
+};
+
+nlohmann::json distribution_json(const runner::Distribution& d) {
+  return {{"median", d.median}, {"q1", d.q1}, {"q3", d.q3},         {"min", d.min},
+          {"max", d.max},       {"mean", d.mean}, {"stddev", d.stddev}};
+}
+
+std::string mib(double bytes) { return fmt::format("{:.1f} MiB", bytes / (1024.0 * 1024.0)); }
+
+std::string duration_text(double s) {
+  if (s < 90) return fmt::format("{:.0f} s", s);
+  return fmt::format("{}m{:02d}s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+}
+
+// What one point knows beyond its samples.
+struct PointInfo {
+  double f_stop = 0;
+  nlohmann::json memory, work, error;
+};
+
+nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
+  nlohmann::json out = nlohmann::json::object();
+  double taps = 0;
+  for (const auto& p : passes) {
+    out["passes"][p.pass] = {{"taps", p.taps}, {"bytes_read", p.bytes_read}, {"bytes_written", p.bytes_written}};
+    taps += p.taps;
+  }
+  out["taps"] = taps;
+  out["taps_per_pixel"] = taps / pixels;
+  return out;
+}
+
+// What names a point: its axes' values.
+nlohmann::json identity_json(const SweepPoint& p) {
+  const FilterOptions& o = p.options;
+  return {{"id", p.id},
+          {"method", p.method->name},
+          {"backend", p.backend},
+          {"scene", p.scene},
+          {"width_px", p.resolution.width_px},
+          {"height_px", p.resolution.height_px},
+          {"N", o.pattern.size_n},
+          {"k", o.pattern.spacing_px},
+          {"max_radius_px", o.pattern.max_radius_px()},
+          {"precision", o.precision},
+          {"buffer_scale", o.buffer_scale},
+          {"options", p.method->options_json(o)},
+          {"max_coc_px", p.max_coc_px}};
+}
+
+// The one serialisation of a measured point.
+nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, const PointInfo& info) {
+  const FilterOptions& o = p.options;
+  std::vector<double> frame = rec.frame_ms();
+  std::map<std::string, std::vector<double>> pass_values;
+  for (const auto& s : rec.samples)
+    for (const auto& [pass, ms] : s.pass_ms) pass_values[pass].push_back(ms);
+  nlohmann::json pass_ms = nlohmann::json::object(), throughput = nlohmann::json::object();
+  for (const auto& [pass, values] : pass_values) {
+    const double median = runner::quantile(values, 0.5);
+    pass_ms[pass] = median;
+    if (info.work.contains("passes") && info.work["passes"].contains(pass) && median > 0) {
+      const auto& w = info.work["passes"][pass];
+      throughput[pass] = {{"taps_per_s", w["taps"].get<double>() / (median * 1e-3)},
+                          {"gb_per_s", (w["bytes_read"].get<double>() + w["bytes_written"].get<double>()) / (median * 1e6)}};
+    }
+  }
+  const runner::Distribution d = runner::distribution(frame);
+  if (p.backend == "cpu" && d.median > 0)
+    throughput["frame"] = {{"taps_per_s", info.work["taps"].get<double>() / (d.median * 1e-3)}};
+  nlohmann::json out = identity_json(p);
+  out.update({          {"f_stop", info.f_stop},
+          {"frame_ms", distribution_json(d)},
+          {"relative_iqr", d.relative_iqr()},
+          {"pass_ms", pass_ms},
+          {"samples_ms", frame},
+          {"sample_rounds", rec.sample_round},
+          {"frames_per_sample", rec.frames_per_sample},
+          {"warm_up_ms", rec.warm_up_ms},
+          {"settled", rec.settled},
+          {"measure_wall_s", rec.wall_s},
+          {"work", info.work},
+          {"throughput", throughput},
+          {"memory", info.memory},
+          {"error", info.error}});
+  return out;
+}
+
+// Google Benchmark's JSON of the measured points: every sample replayed as one repetition of manual
+// time, so gbench computes its statistics and compare.py can pair two runs by the stable names.
+std::string gbench_json(const std::string& sweep, const std::vector<SweepPoint>& points, const runner::RunRecord& record) {
+  static bool initialized = false;
+  if (!initialized) {
+    static char name[] = "bokehbench";  // gbench keeps argv[0] for its context
+    static char* argv[] = {name, nullptr};
+    int argc = 1;
+    benchmark::Initialize(&argc, argv);
+    initialized = true;
+  }
+  benchmark::ClearRegisteredBenchmarks();
+  std::vector<std::size_t> next(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& rec = record.points[i];
+    if (rec.samples.empty()) continue;
+    auto* b = benchmark::RegisterBenchmark((sweep + "/" + points[i].id).c_str(), [&, i](benchmark::State& state) {
+      const runner::Sample& s = rec.samples[next[i]++ % rec.samples.size()];
+      for (auto _ : state) state.SetIterationTime(s.frame_ms * 1e-3);
+      for (const auto& [pass, ms] : s.pass_ms) state.counters[pass + "_ms"] = ms;
+      state.counters["frames_per_sample"] = rec.frames_per_sample;
+    });
+    b->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(static_cast<int>(rec.samples.size()))->UseManualTime();
+    b->ComputeStatistics("min", [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); })
+        ->ComputeStatistics("max", [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); })
+        ->ComputeStatistics("q1", [](const std::vector<double>& v) { return runner::quantile(v, 0.25); })
+        ->ComputeStatistics("q3", [](const std::vector<double>& v) { return runner::quantile(v, 0.75); });
+  }
+  // gbench names a run NAME/iterations:1/repeats:R; R is how many samples this run took, so without
+  // both the names stay the same from run to run and compare.py pairs them.
+  struct StableNames : benchmark::JSONReporter {
+    void ReportRuns(const std::vector<Run>& runs) override {
+      std::vector<Run> renamed = runs;
+      for (Run& r : renamed) r.run_name.iterations.clear(), r.run_name.repetitions.clear();
+      JSONReporter::ReportRuns(renamed);
+    }
+  };
+  std::ostringstream out;
+  StableNames reporter;
+  reporter.SetOutputStream(&out);
+  reporter.SetErrorStream(&out);
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::ClearRegisteredBenchmarks();
+  return out.str();
+}
+
+nlohmann::json methods_json(const std::vector<SweepPoint>& points) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Method& m : registered_methods()) {
+    if (std::none_of(points.begin(), points.end(), [&](const SweepPoint& p) { return p.method == &m; })) continue;
+    nlohmann::json options = nlohmann::json::array();
+    for (const auto& s : m.options) options.push_back({{"key", s.key}, {"help", s.help}, {"default", s.to_json(s.default_value)}});
+    out.push_back({{"name", m.name},
+                   {"description", m.description},
+                   {"precisions", m.precisions},
+                   {"buffer_scales", m.buffer_scales},
+                   {"options", options}});
+  }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSettings& s) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  const int threads = s.cpu_threads > 0 ? s.cpu_threads : default_cpu_threads();
+  const bool any_gpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "gpu"; });
+  const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
+
+  std::optional<vk::Context> ctx;
+  if (any_gpu) {
+    vk::DeviceRequirements wanted;
+    for (const auto& p : points)
+      if (p.backend == "gpu") wanted.add(p.method->needs(p.options));
+    ctx.emplace(s.device, wanted);
+  }
+  const nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
+
+  // Plan: what cannot run is known before anything is allocated.
+  std::vector<std::string> names, skip(points.size());
+  std::vector<PointInfo> info(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const SweepPoint& p = points[i];
+    const Method& m = *p.method;
+    const int w = p.resolution.width_px, h = p.resolution.height_px;
+    names.push_back(p.id);
+    try {
+      check_options(m, p.options);
+      std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
+      for (auto& pass : m.work(p.options, w, h)) work.push_back(std::move(pass));
+      info[i].work = work_json(work, static_cast<double>(w) * h);
+      if (std::string why = m.unsupported ? m.unsupported(p.options, w, h) : ""; !why.empty()) {
+        skip[i] = why;
+        continue;
+      }
+      if (p.backend == "gpu") {
+        if (std::string missing = ctx->unmet(m.needs(p.options)); !missing.empty()) {
+          skip[i] = fmt::format("{} needs {}, which {} lacks", m.name, missing, ctx->info().name);
+          continue;
+        }
+        const MemoryUse use = m.gpu_memory(p.options, w, h, &*ctx);
+        info[i].memory = {{"bytes", use.bytes}, {"from_driver", use.from_driver}, {"details", use.details}};
+      } else {
+        info[i].memory = {{"bytes", m.cpu_memory_bytes(p.options, w, h)}, {"from_driver", false}};
+      }
+      const double bytes = info[i].memory["bytes"].get<double>();
+      if (s.max_buffer_mb > 0 && bytes > s.max_buffer_mb * 1024 * 1024)
+        skip[i] = fmt::format("intermediates {} over --max-buffer-mb {} (not allocated)", mib(bytes), s.max_buffer_mb);
+    } catch (const std::exception& e) {
+      skip[i] = e.what();
+    }
+  }
+
+  // Scenes, lenses and references, made once and shared by the points that need them.
+  std::map<std::string, Scene> scenes;
+  auto scene_for = [&](const SweepPoint& p) -> const Scene& {
+    const std::string key = p.scene + "/" + p.resolution.text();
+    auto it = scenes.find(key);
+    if (it == scenes.end()) it = scenes.emplace(key, make_scene(p.scene, p.resolution.width_px, p.resolution.height_px)).first;
+    return it->second;
+  };
+  auto lens_for = [&](const SweepPoint& p) { return with_max_coc_radius(scene_for(p).lens, scene_for(p).depth_m, p.max_coc_px); };
+  ExactReferenceCache cache(s.reference_cache);
+  std::map<std::string, ExactReferences> exact;
+  std::map<std::string, Image> extra;
+
+  auto first_ready = [&](std::size_t i, const Image& output) {
+    const SweepPoint& p = points[i];
+    const Scene& scene = scene_for(p);
+    const Lens lens = lens_for(p);
+    const float clamp = p.options.pattern.max_radius_px();
+    const std::string key = fmt::format("{}/{}/{}/{}", p.scene, p.resolution.text(), p.max_coc_px, clamp);
+    auto it = exact.find(key);
+    if (it == exact.end()) it = exact.emplace(key, exact_references(scene, lens, clamp, cache)).first;
+    info[i].error = error_json(output, it->second);
+    if (s.extra_reference)
+      if (auto ref = s.extra_reference(p, scene, lens)) {
+        auto e = extra.find(ref->key);
+        if (e == extra.end()) e = extra.emplace(ref->key, ref->make()).first;
+        info[i].error["vs_" + ref->field] = metrics_json(compare_images(output, e->second));
+      }
+  };
+
+  runner::Hooks hooks;
+  hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
+    const SweepPoint& p = points[i];
+    const Scene& scene = scene_for(p);
+    const Lens lens = lens_for(p);
+    info[i].f_stop = lens.f_stop;
+    if (p.backend == "gpu") return std::make_unique<GpuTarget>(*ctx, *p.method, scene, lens, p.options);
+    return std::make_unique<CpuTarget>(*p.method, scene, lens, p.options, threads);
+  };
+  hooks.first_ready = [&](std::size_t i, runner::Target& t) {
+    if (auto* g = dynamic_cast<GpuTarget*>(&t)) first_ready(i, g->output());
+    if (auto* c = dynamic_cast<CpuTarget*>(&t)) first_ready(i, c->output());
+  };
+  std::vector<CalibrationKernel> calibration;
+  if (ctx)
+    for (auto& k : gpu_calibration(*ctx)) calibration.push_back(std::move(k));
+  if (any_cpu)
+    for (auto& k : cpu_calibration(threads)) calibration.push_back(std::move(k));
+  for (auto& k : calibration) hooks.probes.emplace_back(k.name, std::move(k.target));
+
+  const std::filesystem::path out_dir(s.out_dir);
+  const std::string final_path = (out_dir / (s.name + ".json")).string();
+  const std::string partial_path = (out_dir / (s.name + ".partial.json")).string();
+  const std::string gbench_path = (out_dir / (s.name + "_gbench.json")).string();
+  const std::string gbench_partial = (out_dir / (s.name + "_gbench.partial.json")).string();
+
+  auto document = [&](const runner::RunRecord& rec) {
+    nlohmann::json measured = nlohmann::json::array(), skipped = nlohmann::json::array();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto& r = rec.points[i];
+      if (!r.skipped.empty()) {
+        nlohmann::json entry = identity_json(points[i]);
+        entry.update({{"reason", r.skipped}, {"memory", info[i].memory}});
+        skipped.push_back(std::move(entry));
+      } else if (!r.samples.empty()) {
+        measured.push_back(point_json(points[i], r, info[i]));
+      }
+    }
+    nlohmann::json order = nlohmann::json::array(), probes = nlohmann::json::object(), limits = nlohmann::json::object();
+    for (const auto& round : rec.round_order) {
+      nlohmann::json ids = nlohmann::json::array();
+      for (std::size_t i : round) ids.push_back(points[i].id);
+      order.push_back(ids);
+    }
+    for (const auto& k : calibration) {
+      const auto it = rec.probe_ms.find(k.name);
+      if (it == rec.probe_ms.end() || it->second.empty()) continue;
+      const runner::Distribution d = runner::distribution(it->second);
+      probes[k.name] = {{"ms_per_round", it->second},
+                        {"ms", distribution_json(d)},
+                        {"drift", d.median > 0 ? (d.max - d.min) / d.median : 0.0},
+                        {"bytes", k.bytes},
+                        {"flops", k.flops}};
+      if (k.bytes > 0) limits[k.name + "_gb_per_s"] = k.bytes / (d.median * 1e6);
+      if (k.flops > 0) limits[k.name + "_gflop_per_s"] = k.flops / (d.median * 1e6);
+    }
+    nlohmann::json doc = {
+        {"status", rec.status},
+        {"config", s.config},
+        {"methods", methods_json(points)},
+        {"measurement",
+         {{"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded); "
+                          "each visit takes one sample of frames_per_sample frames"},
+          {"seed", s.policy.seed},
+          {"budget_s", s.policy.budget_s},
+          {"min_samples", s.policy.min_samples},
+          {"max_samples", s.policy.max_samples},
+          {"settled_relative_iqr", s.policy.settled_relative_iqr},
+          {"sample_min_ms", s.policy.sample_min_ms},
+          {"rounds", rec.round_order.size()},
+          {"round_order", order},
+          {"probes", probes},
+          {"limits", limits},
+          {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "
+                     "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included"}}},
+        {"points", measured},
+        {"skipped", skipped},
+        {"elapsed_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()}};
+    return doc;
+  };
+
+  auto last_write = std::chrono::steady_clock::now() - std::chrono::hours(1);
+  hooks.checkpoint = [&](const runner::RunRecord& rec) {
+    if (std::chrono::steady_clock::now() - last_write < std::chrono::seconds(2)) return;
+    write_results(partial_path, "bokehbench." + s.name, context, document(rec));
+    last_write = std::chrono::steady_clock::now();
+  };
+  std::size_t measurable = std::count(skip.begin(), skip.end(), "");
+  int printed_round = -1;
+  hooks.progress = [&](const runner::Progress& pr, const runner::PointRecord& rec) {
+    if (pr.round == 0) {
+      std::string what = rec.skipped.empty()
+                             ? fmt::format("{:10.3f} ms ({} frames/sample)", rec.samples.back().frame_ms, rec.frames_per_sample)
+                             : "skipped: " + rec.skipped;
+      fmt::print("[{:>3}/{}] {:<58} {}  ~{} left\n", pr.visits_done, measurable, rec.name, what,
+                 duration_text(pr.eta_s));
+    } else if (pr.round != printed_round) {
+      fmt::print("round {}: {} of {} points still measuring, {} elapsed, ~{} left\n", pr.round + 1, pr.points_active,
+                 measurable, duration_text(pr.elapsed_s), duration_text(pr.eta_s));
+    }
+    printed_round = pr.round;
+    std::fflush(stdout);
+  };
+
+  fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),
+             measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
+             s.policy.budget_s);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!skip[i].empty()) fmt::print("  skipped {}: {}\n", points[i].id, skip[i]);
+
+  runner::RunRecord record;
+  {
+    runner::InterruptScope interrupts;
+    record = runner::run(names, skip, s.policy, hooks);
+  }
+  nlohmann::json doc = document(record);
+  const bool complete = record.status == "complete";
+  if (s.derive) s.derive(doc);
+  // gbench's own statistics and names, for compare.py.
+  write_text_atomically(complete ? gbench_path : gbench_partial, gbench_json(s.name, points, record));
+  if (!complete) {
+    write_results(partial_path, "bokehbench." + s.name, context, doc);
+    throw std::runtime_error(fmt::format("interrupted after {} rounds: what was measured is in {} (earlier complete "
+                                         "results, if any, are untouched)",
+                                         record.round_order.size(), partial_path));
+  }
+  write_results(final_path, "bokehbench." + s.name, context, doc);
+  std::filesystem::remove(partial_path);
+  std::filesystem::remove(gbench_partial);
+  if (s.summary) s.summary(doc);
+  fmt::print("wrote {} and {} ({})\n", final_path, gbench_path,
+             duration_text(std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()));
+  if (s.plot && !s.plot_script.empty())
+    run_plot_script(s.plot_script, final_path, (std::filesystem::path(s.plots_dir) / s.name).string());
+  return doc;
+}
+
+}  // namespace bokeh

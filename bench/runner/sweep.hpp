@@ -1,0 +1,88 @@
+#pragma once
+// One sweep runner for every command: a command declares its axes and what to write; this takes
+// their product, skips impossible or over-budget points with the reason, measures the rest
+// interleaved (runner.hpp) on the GPU and as CPU references, attaches each point's error against the
+// cached exact reference, writes partial results atomically beside the complete ones, and plots.
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "method.hpp"
+#include "runner.hpp"
+#include "scene.hpp"
+
+namespace bokeh {
+
+struct Resolution {
+  int width_px = 800, height_px = 600;
+  std::string text() const;
+};
+// "WIDTHxHEIGHT", 16..16384 px a side; throws std::invalid_argument naming the text.
+Resolution parse_resolution(const std::string& text);
+// "NxK", a valid gather pattern; throws std::invalid_argument naming the text.
+GatherPattern parse_pattern(const std::string& text);
+
+// A sweep's axes: the product of all of them, less what a method does not accept.
+struct Axes {
+  std::vector<std::string> methods;
+  std::vector<std::string> backends = {"gpu"};
+  std::vector<std::string> scenes = {"hoops"};
+  std::vector<Resolution> resolutions = {Resolution{}};
+  std::vector<GatherPattern> patterns;
+  // Precisions: empty = each method's default; {"all"} = every one a method accepts; otherwise those
+  // listed (a method that accepts none of them runs at its default).
+  std::vector<std::string> precisions;
+  // Buffer scales: empty = 1; {0} = every scale a method accepts; otherwise those listed.
+  std::vector<int> scales;
+  // Method options set on the command line (applied to the methods that have them).
+  std::map<std::string, double> option_values;
+  // Also sweep each option's `tradeoff` values (tradeoff).
+  bool sweep_options = false;
+  // The scene's largest CoC radius: unset = the pattern's max radius (the lens follows N, as in
+  // figure9), else this many px for every point.
+  std::optional<double> max_coc_px;
+};
+
+struct SweepPoint {
+  std::string id;  // stable across runs: what results and Google Benchmark names carry
+  const Method* method = nullptr;
+  std::string backend;
+  std::string scene;
+  Resolution resolution;
+  FilterOptions options;
+  double max_coc_px = 0;
+};
+
+std::vector<SweepPoint> expand(const Axes& axes);
+
+struct SweepSettings {
+  std::string name;  // results/<name>.json, results/<name>_gbench.json, plots/<name>.png
+  std::string out_dir = "results", plots_dir = "plots", plot_script, reference_cache = "build/reference-cache";
+  std::string device;
+  runner::Policy policy;
+  double max_buffer_mb = 0;  // > 0: points whose intermediates exceed this many MiB are skipped unallocated
+  int cpu_threads = 0;       // 0: every core
+  bool plot = true;
+  nlohmann::json config = nlohmann::json::object();  // the command's own settings, recorded as they are
+  // A further reference for some points (e.g. full-resolution f32 FLAG for `buffers`): the point's
+  // error gains vs_<field>; make() runs once per distinct key.
+  struct ExtraReference {
+    std::string field, key;
+    std::function<Image()> make;
+  };
+  std::function<std::optional<ExtraReference>(const SweepPoint&, const Scene&, const Lens&)> extra_reference;
+  // Adds the command's derived results (fits, ratios, Pareto front) to the document.
+  std::function<void(nlohmann::json& doc)> derive;
+  // Prints the command's summary from the finished document.
+  std::function<void(const nlohmann::json& doc)> summary;
+};
+
+// Runs the sweep and returns the document written to <out_dir>/<name>.json (with status
+// "complete"), or, interrupted, to <name>.partial.json beside any earlier complete result (and then
+// throws, naming the file).
+nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSettings& settings);
+
+}  // namespace bokeh

@@ -1,0 +1,182 @@
+// GPU FLAG: horizontal pass into a 3D storage image (ceil(N/2) layers), vertical pass out.
+// A 3D image rather than a buffer: lavapipe's storage buffers stop at 128 MiB, and the paper's
+// 1080p/41x41 buffer is 332 MiB.
+//
+// Layer precisions (LayerPrecision, kernels/flag.hpp): one image format and one shader pair each.
+// The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
+// without the 3D-buffer writes, reducing each (row, layer, channel) to its min and max with
+// atomicMin/atomicMax on the float bits (shaders/flag_bracket.comp) into a small storage buffer
+// (2 x rows x layers uvec4, reset by vkCmdFillBuffer in the same pass); the horizontal pass
+// stores (v - min) / (max - min) in the unorm format and the vertical pass reads min + (max - min) q.
+//
+// FilterOptions::buffer_scale s > 1 (kernels/flag_reduced.hpp): "downsample" packs the full-res
+// colour and CoC into a ceil(W/s) x ceil(H/s) FLAG input for the low-res pattern, FLAG runs there
+// into a ceil(L/s)-layer buffer, and "upsample" adds the bilinear low-res result to the sharp part of
+// each full-res pixel. Passes, each timed: downsample (s > 1), bracket (bracketed), horizontal,
+// vertical, upsample (s > 1).
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <stdexcept>
+
+#include "flag_reduced.hpp"
+#include "flag_gpu.hpp"
+#include "vk/spirv.hpp"
+
+namespace bokeh {
+
+using gpu::GpuFrame;
+using gpu::PassParams;
+
+VkFormat layer_format(LayerPrecision precision) {
+  switch (precision) {
+    case LayerPrecision::f32: return VK_FORMAT_R32G32B32A32_SFLOAT;
+    case LayerPrecision::f16: return VK_FORMAT_R16G16B16A16_SFLOAT;
+    case LayerPrecision::r11g11b10f: return VK_FORMAT_B10G11R11_UFLOAT_PACK32;
+    case LayerPrecision::unorm10_bracketed: return VK_FORMAT_A2B10G10R10_UNORM_PACK32;
+    case LayerPrecision::unorm16_bracketed: return VK_FORMAT_R16G16B16A16_UNORM;
+  }
+  throw std::invalid_argument("layer_format: unknown layer precision");
+}
+
+std::uint64_t flag_bracket_buffer_bytes(std::uint32_t rows, std::uint32_t layers) {
+  return 2ull * rows * layers * 4 * sizeof(std::uint32_t);  // min and max blocks of uvec4 (rgb, unused)
+}
+
+namespace {
+
+constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+constexpr std::int32_t kBracketChunk = 32;  // pixels per invocation of flag_bracket.comp
+
+std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / b; }
+
+// The unsigned formats cannot hold negative layer values: check the uploaded colour once, with the
+// CPU reference's message.
+void check_colour(GpuFrame& frame, LayerPrecision precision) {
+  if (!is_unsigned(precision)) return;
+  Image rgba(frame.params.width_px, frame.params.height_px, 4);
+  vk::download(frame.ctx, frame.color, rgba.pixels.data(), rgba.pixels.size() * sizeof(float));
+  check_layer_input(rgba, precision);
+}
+
+class Flag final : public gpu::GpuFilter {
+ public:
+  Flag(GpuFrame& frame, const FilterOptions& options)
+      : Flag(frame, options, layer_precision_from_string(options.precision)) {}
+  Flag(GpuFrame& frame, const FilterOptions& options, LayerPrecision precision)
+      : frame_(frame),
+        scale_(options.buffer_scale),
+        pattern_(reduced_pattern(options.pattern, options.buffer_scale)),
+        low_width_(ceil_div(frame.width(), scale_)),
+        low_height_(ceil_div(frame.height(), scale_)),
+        layers_(frame.ctx, layer_format(precision), low_width_, low_height_,
+                static_cast<std::uint32_t>(pattern_.layers())),
+        horizontal_(frame.ctx, vk::spirv(std::string("flag/horizontal_") + to_string(precision)),
+                    is_bracketed(precision) ? std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}
+                                            : std::vector<VkDescriptorType>{kBuffer, kImage},
+                    sizeof(PassParams), {pattern_.layers()}),
+        vertical_(frame.ctx, vk::spirv(std::string("flag/vertical_") + to_string(precision)),
+                  is_bracketed(precision) ? std::vector<VkDescriptorType>{kImage, kBuffer, kBuffer}
+                                          : std::vector<VkDescriptorType>{kImage, kBuffer},
+                  sizeof(PassParams), {pattern_.layers()}) {
+    check_colour(frame, precision);
+    const vk::Buffer* flag_input = &frame.packed;
+    const vk::Buffer* flag_output = &frame.output;
+    if (scale_ > 1) {
+      const VkDeviceSize low_bytes = static_cast<VkDeviceSize>(low_width_) * low_height_ * 16;
+      packed_low_.emplace(vk::make_storage_buffer(frame.ctx, low_bytes, "low-res packed input"));
+      output_low_.emplace(vk::make_storage_buffer(frame.ctx, low_bytes, "low-res FLAG output"));
+      downsample_.emplace(frame.ctx, vk::spirv("flag/downsample"), std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer},
+                          sizeof(PassParams),
+                          std::vector<std::int32_t>{scale_, frame.params.width_px, frame.params.height_px});
+      downsample_->bind(0, frame.color);
+      downsample_->bind(1, frame.packed);
+      downsample_->bind(2, *packed_low_);
+      upsample_.emplace(frame.ctx, vk::spirv("flag/upsample"),
+                        std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(PassParams),
+                        std::vector<std::int32_t>{scale_, static_cast<std::int32_t>(low_width_),
+                                                  static_cast<std::int32_t>(low_height_)});
+      upsample_->bind(0, frame.color);
+      upsample_->bind(1, frame.packed);
+      upsample_->bind(2, *output_low_);
+      upsample_->bind(3, frame.output);
+      flag_input = &*packed_low_;
+      flag_output = &*output_low_;
+    }
+    horizontal_.bind(0, *flag_input);
+    horizontal_.bind(1, layers_);
+    vertical_.bind(0, layers_);
+    vertical_.bind(1, *flag_output);
+    if (is_bracketed(precision)) {
+      brackets_.emplace(vk::make_storage_buffer(
+          frame.ctx, flag_bracket_buffer_bytes(low_height_, static_cast<std::uint32_t>(pattern_.layers())),
+          "FLAG bracket buffer"));
+      bracket_.emplace(frame.ctx, vk::spirv("flag/bracket"), std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer},
+                       sizeof(PassParams), std::vector<std::int32_t>{pattern_.layers(), kBracketChunk});
+      bracket_->bind(0, *flag_input);
+      bracket_->bind(2, *brackets_);
+      horizontal_.bind(2, *brackets_);
+      vertical_.bind(2, *brackets_);
+    }
+  }
+
+  void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
+    // frame_.params may be a warm-up's smaller region: derive the low-res one from it each time.
+    const PassParams full = frame_.params;
+    PassParams low = full;
+    low.width_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.width_px), scale_));
+    low.height_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.height_px), scale_));
+    low.half_n = pattern_.half();
+    low.max_radius_px = pattern_.max_radius_px();
+    const auto lw = static_cast<std::uint32_t>(low.width_px), lh = static_cast<std::uint32_t>(low.height_px);
+    if (downsample_) {
+      downsample_->dispatch(cmd, &low, lw, lh);
+      timer.end_pass(cmd, "downsample");
+    }
+    if (bracket_) {
+      const VkDeviceSize half = brackets_->bytes() / 2;
+      vkCmdFillBuffer(cmd, brackets_->get(), 0, half, 0xffffffffu);  // min: above every float's bits
+      vkCmdFillBuffer(cmd, brackets_->get(), half, half, 0u);         // max
+      VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+      barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+      barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier,
+                           0, nullptr, 0, nullptr);
+      bracket_->dispatch(cmd, &low, ceil_div(lw, kBracketChunk), lh);
+      timer.end_pass(cmd, "bracket");
+    }
+    horizontal_.dispatch(cmd, &low, lw, lh);
+    timer.end_pass(cmd, "horizontal");
+    vertical_.dispatch(cmd, &low, lw, lh);
+    timer.end_pass(cmd, "vertical");
+    if (upsample_) {
+      upsample_->dispatch(cmd, &full, frame_.width(), frame_.height());
+      timer.end_pass(cmd, "upsample");
+    }
+  }
+
+  std::uint64_t intermediate_bytes() const override {
+    std::uint64_t bytes = layers_.allocated_bytes();
+    for (const auto* b : {&packed_low_, &output_low_, &brackets_})
+      if (*b) bytes += (*b)->allocated_bytes();
+    return bytes;
+  }
+
+ private:
+  GpuFrame& frame_;
+  std::int32_t scale_;
+  GatherPattern pattern_;  // the (low-res) pattern the FLAG passes run
+  std::uint32_t low_width_, low_height_;
+  vk::StorageImage3D layers_;
+  vk::ComputePipeline horizontal_, vertical_;
+  std::optional<vk::Buffer> packed_low_, output_low_, brackets_;
+  std::optional<vk::ComputePipeline> downsample_, upsample_, bracket_;
+};
+
+}  // namespace
+
+std::unique_ptr<gpu::GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options) {
+  return std::make_unique<Flag>(frame, options);
+}
+
+}  // namespace bokeh

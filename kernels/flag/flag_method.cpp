@@ -1,0 +1,124 @@
+// flag: FLAG (Moersch & Hamilton 2014), section 3.2, with reduced-precision and reduced-resolution
+// 3D buffers (section 5).
+#include <cmath>
+
+#include "flag.hpp"
+#include "flag_gpu.hpp"
+#include "flag_memory.hpp"
+#include "flag_reduced.hpp"
+#include "method.hpp"
+#include "vk/memory.hpp"
+
+namespace bokeh::methods {
+
+namespace {
+
+int ceil_div(int a, int b) { return (a + b - 1) / b; }
+
+std::vector<PassWork> flag_work(const FilterOptions& o, int w, int h) {
+  const LayerPrecision precision = layer_precision_from_string(o.precision);
+  const int s = o.buffer_scale;
+  const GatherPattern low = reduced_pattern(o.pattern, s);
+  const double full = static_cast<double>(w) * h, lows = static_cast<double>(ceil_div(w, s)) * ceil_div(h, s);
+  const double layer_bytes = lows * low.layers() * bytes_per_texel(precision);
+  std::vector<PassWork> work;
+  if (s > 1) work.push_back({"downsample", full, full * 32, lows * 16});
+  if (is_bracketed(precision))
+    work.push_back({"bracket", lows * low.size_n, lows * 16,
+                    static_cast<double>(flag_bracket_buffer_bytes(ceil_div(h, s), low.layers()))});
+  work.push_back({"horizontal", lows * low.size_n, lows * 16, layer_bytes});
+  work.push_back({"vertical", lows * low.size_n, layer_bytes, lows * 16});
+  if (s > 1) work.push_back({"upsample", full * 4, full * 32 + lows * 16, full * 16});
+  return work;
+}
+
+MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx) {
+  const LayerPrecision precision = layer_precision_from_string(o.precision);
+  const FlagBufferExtent e = flag_buffer_extent(w, h, o.pattern, o.buffer_scale);
+  MemoryUse use;
+  const std::uint64_t texels = flag_texel_bytes(w, h, o.pattern, precision, o.buffer_scale);
+  std::uint64_t layers = texels;
+  if (ctx) {
+    layers = vk::image_3d_requirement_bytes(*ctx, layer_format(precision), e.width, e.height, e.layers);
+    use.from_driver = true;
+  }
+  std::uint64_t other = 0;
+  if (is_bracketed(precision)) other += flag_bracket_buffer_bytes(e.height, e.layers);
+  if (o.buffer_scale > 1) other += 2ull * e.width * e.height * 16;  // low-res packed input and output
+  use.bytes = layers + other;
+  const double paper = flag_paper_bytes(w, h, o.pattern, precision, o.buffer_scale);
+  use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
+                 {"bytes_per_texel", bytes_per_texel(precision)},
+                 {"layer_buffer_bytes", layers},
+                 {"texel_bytes", texels},
+                 {"paper_convention_bytes", paper},
+                 {"other_bytes", other}};
+  return use;
+}
+
+}  // namespace
+
+void declare_flag(std::vector<Method>& methods) {
+  Method m;
+  m.name = "flag";
+  m.description = "FLAG: horizontal pass into a ceil(N/2)-layer 3D buffer, vertical pass (FLAG paper 3.2)";
+  for (LayerPrecision p : all_layer_precisions()) m.precisions.push_back(to_string(p));
+  // The paper's RGBA16F first: the default.
+  std::swap(m.precisions[0], m.precisions[1]);
+  m.buffer_scales = {1, 2, 4};
+  m.device = [](const FilterOptions& o) {
+    vk::DeviceRequirements needs;
+    needs.storage_image_3d_formats = {layer_format(layer_precision_from_string(o.precision))};
+    return needs;
+  };
+  m.cpu_reference = [](const CpuInput& in) {
+    const LayerPrecision precision = layer_precision_from_string(in.options.precision);
+    if (in.options.buffer_scale != 1)
+      return flag_reduced_blur(in.color, in.radius_px, in.options.pattern, in.options.buffer_scale, precision,
+                               in.threads);
+    return flag_blur(in.packed, in.options.pattern, precision, in.threads);
+  };
+  m.make_gpu = make_flag_gpu;
+  m.work = flag_work;
+  m.gpu_memory = flag_gpu_memory;
+  m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
+    const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
+    const auto lw = static_cast<std::uint64_t>(ceil_div(w, o.buffer_scale)), lh = static_cast<std::uint64_t>(ceil_div(h, o.buffer_scale));
+    return lw * lh * low.layers() * 3 * sizeof(float);  // FlagLayers: the whole 3D buffer in f32
+  };
+  // Against the CPU emulation of the same format. Each output sums 2n+1 non-negative layer values,
+  // none larger than the image's largest output (layer 0 of the pixel's own row is part of it):
+  //   f32: summation order only; f16 / r11g11b10f: one ulp per stored value (Vulkan lets the GPU round
+  //   toward zero where the CPU rounds to nearest): 2^-10 / 2^-5 (blue) of the output; bracketed:
+  //   one code per value, (2n+1) / levels of the largest value. Doubled for the bilinear upsample of
+  //   reduced buffers (a low-res value can exceed the full-res output it feeds by up to 2x).
+  m.gpu_tolerance = [](const FilterOptions& o) {
+    const LayerPrecision p = layer_precision_from_string(o.precision);
+    const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
+    const double upsample = o.buffer_scale > 1 ? 2.0 : 1.0;
+    switch (p) {
+      case LayerPrecision::f32: return 1e-5;
+      case LayerPrecision::f16: return upsample * std::ldexp(1.0, -10) + 1e-5;
+      case LayerPrecision::r11g11b10f: return upsample * std::ldexp(1.0, -5) + 1e-5;
+      default: return upsample * low.size_n / bracket_levels(p) + 1e-5;
+    }
+  };
+  // Storage, per output value relative to the largest: a GPU may round each stored layer value
+  // either way (Vulkan allows it): one ulp of the output, 2^-10 (f16) or 2^-5 (r11g11b10f's blue);
+  // bracketed: one code of each of the 2n+1 values summed. The reduced buffers' downsample and
+  // upsample conserve energy (the bilinear tent weights sum to one per low-res pixel) and are exact
+  // at radius 0 (every source below s / 2 stays at full resolution).
+  m.storage_tolerance = [](const FilterOptions& o) {
+    const LayerPrecision p = layer_precision_from_string(o.precision);
+    switch (p) {
+      case LayerPrecision::f32: return 0.0;
+      case LayerPrecision::f16: return std::ldexp(1.0, -10);
+      case LayerPrecision::r11g11b10f: return std::ldexp(1.0, -5);
+      default: return static_cast<double>(reduced_pattern(o.pattern, o.buffer_scale).size_n) / bracket_levels(p);
+    }
+  };
+  m.energy_note = "the same sums as naive (each source's contributions sum to its colour), up to the layers' storage";
+  methods.push_back(std::move(m));
+}
+
+}  // namespace bokeh::methods

@@ -1,0 +1,153 @@
+// One suite over the registry: every method x precision x buffer scale it accepts, checked against
+// what the method itself declares (method.hpp). A new method is covered without editing this file.
+//   GPU vs CPU reference: max |GPU - CPU| <= gpu_tolerance x the reference's largest value.
+//   Radius 0 (a pinhole lens) is the identity, up to storage_tolerance x the largest value.
+//   Energy: at a constant radius with a black border wider than any kernel, the output's total equals
+//   the input's (methods that declare they conserve it), up to storage_tolerance x the largest value
+//   on every output value.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "coc.hpp"
+#include "method.hpp"
+#include "run.hpp"
+#include "scene.hpp"
+#include "test_support.hpp"
+
+namespace bokeh {
+namespace {
+
+using namespace bokeh::test;
+
+vk::Context& context() {
+  static vk::Context ctx;
+  return ctx;
+}
+
+struct Config {
+  const Method* method;
+  FilterOptions options;
+};
+
+void PrintTo(const Config& c, std::ostream* os) {
+  *os << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale;
+}
+
+// N = 9 at k = 2: radii up to 8 px, four rows of FLAG layers, kernels of 8..11 px.
+std::vector<Config> all_configs() {
+  std::vector<Config> configs;
+  for (const Method& m : registered_methods())
+    for (const auto& precision : m.precisions)
+      for (int scale : m.buffer_scales) {
+        FilterOptions o = m.defaults({9, 2});
+        o.precision = precision;
+        o.buffer_scale = scale;
+        configs.push_back({&m, o});
+      }
+  return configs;
+}
+
+double max_abs(const Image& image) {
+  double m = 0;
+  for (float v : image.pixels) m = std::max(m, double(std::abs(v)));
+  return m;
+}
+
+void skip_if_device_lacks(const Method& m, const FilterOptions& o) {
+  if (const std::string missing = context().unmet(m.needs(o)); !missing.empty())
+    GTEST_SKIP() << m.name << " needs " << missing << ", which " << context().info().name << " lacks";
+}
+
+class Conformance : public ::testing::TestWithParam<Config> {};
+
+TEST_P(Conformance, GpuMatchesCpuReferenceWithinTheStatedBound) {
+  const Config c = GetParam();
+  skip_if_device_lacks(*c.method, c.options);
+  const Scene s = make_scene("hoops", 63, 46);  // not multiples of 4 or 8: partial blocks and workgroups
+  // 1.2x: some pixels clamp at the largest radius, the rest spread below it.
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2);
+  const Image cpu = run_cpu(*c.method, s.color, s.depth_m, lens, c.options, 2);
+  const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options);
+  ASSERT_TRUE(gpu.same_shape(cpu));
+  for (float v : gpu.pixels) ASSERT_TRUE(std::isfinite(v));
+  const double error = max_abs_diff(gpu, cpu) / max_abs(cpu);
+  const double bound = c.method->gpu_tolerance(c.options);
+  std::printf("[conformance] %s %s 1/%d: GPU vs CPU %.3g of the largest value (bound %.3g)\n", c.method->name.c_str(),
+              c.options.precision.c_str(), c.options.buffer_scale, error, bound);
+  EXPECT_LE(error, bound);
+}
+
+TEST_P(Conformance, RadiusZeroIsTheIdentity) {
+  const Config c = GetParam();
+  skip_if_device_lacks(*c.method, c.options);
+  Scene s = make_scene("pillars", 64, 48);
+  s.lens.f_stop = 1e12;  // a pinhole: every radius 0
+  const double bound = c.method->storage_tolerance(c.options) * max_abs(s.color) + 1e-6 * max_abs(s.color);
+  for (const bool gpu : {false, true}) {
+    const Image out = gpu ? run_gpu(context(), *c.method, s.color, s.depth_m, s.lens, c.options)
+                          : run_cpu(*c.method, s.color, s.depth_m, s.lens, c.options, 2);
+    EXPECT_LE(max_abs_diff(out, s.color), bound) << (gpu ? "GPU" : "CPU");
+  }
+}
+
+TEST_P(Conformance, EnergyIsConservedAwayFromTheBorders) {
+  const Config c = GetParam();
+  if (!c.method->conserves_energy) GTEST_SKIP() << c.method->name << " does not conserve energy: " << c.method->energy_note;
+  skip_if_device_lacks(*c.method, c.options);
+  // Every pixel behind the focus at the largest radius; light only inside a margin of twice it.
+  const int w = 80, h = 64, margin = 2 * static_cast<int>(c.options.pattern.max_radius_px()) + 2;
+  Image color = random_image(w, h, 3, 0.0f, 4.0f, 7);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
+        for (int ch = 0; ch < 3; ++ch) color.px(x, y)[ch] = 0.0f;
+  const Image depth(w, h, 1, 10.0f);
+  const Lens lens = with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2);
+  auto total = [](const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); };
+  const double in = total(color);
+  const double bound = c.method->storage_tolerance(c.options) * max_abs(color) * color.pixels.size() / in + 1e-5;
+  for (const bool gpu : {false, true}) {
+    const Image out = gpu ? run_gpu(context(), *c.method, color, depth, lens, c.options)
+                          : run_cpu(*c.method, color, depth, lens, c.options, 2);
+    EXPECT_NEAR(total(out) / in, 1.0, bound) << (gpu ? "GPU" : "CPU") << ": " << c.method->energy_note;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(all_configs()), [](const auto& info) {
+  return info.param.method->name + "_" + info.param.options.precision + "_scale" +
+         std::to_string(info.param.options.buffer_scale);
+});
+
+// Every method declares what the harness reads of it.
+TEST(Registry, EveryMethodDeclaresItsModels) {
+  for (const Method& m : registered_methods()) {
+    SCOPED_TRACE(m.name);
+    EXPECT_FALSE(m.precisions.empty());
+    EXPECT_TRUE(m.cpu_reference && m.make_gpu && m.work && m.gpu_memory && m.cpu_memory_bytes && m.gpu_tolerance &&
+                m.storage_tolerance);
+    const FilterOptions o = m.defaults({9, 2});
+    EXPECT_NO_THROW(check_options(m, o));
+    const auto work = m.work(o, 64, 48);
+    ASSERT_FALSE(work.empty());
+    for (const auto& pass : work) EXPECT_GT(pass.taps + pass.bytes_read + pass.bytes_written, 0) << pass.pass;
+  }
+}
+
+// The work model names the passes the GPU driver stamps, in the same order (CoC first).
+TEST(Registry, WorkModelNamesTheTimedPasses) {
+  const Scene s = make_scene("hoops", 32, 24);
+  for (const Config& c : all_configs()) {
+    if (!context().unmet(c.method->needs(c.options)).empty()) continue;
+    std::vector<vk::PassTime> passes;
+    run_gpu(context(), *c.method, s.color, s.depth_m, s.lens, c.options, &passes);
+    std::vector<std::string> timed, modelled = {"coc"};
+    for (const auto& p : passes) timed.push_back(p.pass);
+    for (const auto& w : c.method->work(c.options, 32, 24)) modelled.push_back(w.pass);
+    EXPECT_EQ(timed, modelled) << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale;
+  }
+}
+
+}  // namespace
+}  // namespace bokeh

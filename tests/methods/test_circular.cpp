@@ -1,0 +1,273 @@
+// Circular separable filters: coefficient tables, kernel normalisation, ripple against the published
+// figures, disc size, intermediate precision bounds, and the per-pixel CoC near/far composite.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <numbers>
+
+#include "circular_coefficients.hpp"
+#include "circular_separable.hpp"
+#include "test_support.hpp"
+
+namespace bokeh {
+namespace {
+
+using namespace bokeh::test;
+
+// Published max pass/stop-band error per component count (README, Niemitalo / Garcia).
+constexpr double kPublishedRipple[] = {0.232, 0.076, 0.027, 0.011, 0.0041, 0.0020};
+// The tables are rounded to 6 decimals; measured ripple sits within 2% of the published figures.
+constexpr double kRippleRoundingSlack = 1.02;
+
+TEST(CircularCoefficients, TablesAvoidKnownPortTraps) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    ASSERT_EQ(circular_components(n).size(), static_cast<std::size_t>(n));
+    for (const CircularComponent& c : circular_components(n)) EXPECT_GT(c.a, 0.0) << n << " components: growing envelope";
+  }
+  EXPECT_DOUBLE_EQ(circular_components(4)[1].B, -15.227561);
+  EXPECT_DOUBLE_EQ(circular_scale(1), 1.4);
+  EXPECT_DOUBLE_EQ(circular_scale(2), 1.2);
+  EXPECT_THROW(circular_components(0), std::invalid_argument);
+  EXPECT_THROW(circular_components(7), std::invalid_argument);
+}
+
+TEST(CircularCoefficients, Kernel2dSumsToOne) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    std::vector<CircularKernel> kernels;
+    for (int radius : {1, 3, 8, 17, 32}) kernels.push_back(make_circular_kernel(n, radius));
+    for (double disc : {2.5, 9.3}) kernels.push_back(make_circular_kernel_for_disc(n, disc));
+    for (const CircularKernel& k : kernels) {
+      double sum = 0.0;  // direct 2D sum, independent of the (sum F)^2 shortcut the normaliser uses
+      for (int y = -k.radius_px; y <= k.radius_px; ++y)
+        for (int x = -k.radius_px; x <= k.radius_px; ++x) sum += kernel_2d(k, x, y);
+      EXPECT_NEAR(sum, 1.0, 1e-5) << n << " components, R = " << k.radius_px;
+    }
+  }
+}
+
+TEST(CircularCoefficients, SeparableProductEqualsClosedFormRadialProfile) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    const CircularKernel k = make_circular_kernel(n, 20);
+    for (int y = -k.radius_px; y <= k.radius_px; y += 3)
+      for (int x = -k.radius_px; x <= k.radius_px; ++x) {
+        const double u = k.u_per_px * std::hypot(x, y);
+        // Float taps; the large-weight tables (5, 6 components) cancel terms of ~100: seen <= 5e-6.
+        EXPECT_NEAR(kernel_2d(k, x, y) * k.normalisation, circular_radial_profile(n, u), 2e-5)
+            << n << " components at (" << x << ", " << y << ")";
+      }
+  }
+}
+
+TEST(CircularCoefficients, RippleMatchesPublishedFigures) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    const RippleReport r = measure_ripple(n);
+    const double published = kPublishedRipple[n - 1];
+    const double worst = std::max(r.max_ripple_passband, r.max_ripple_stopband);
+    EXPECT_LE(worst, published * kRippleRoundingSlack) << n << " components";
+    // Tight from below too: a wrong band or normalisation would not land this close.
+    EXPECT_GE(worst, published * 0.95) << n << " components";
+    EXPECT_LE(r.max_ripple_passband, published * kRippleRoundingSlack);
+    EXPECT_LE(r.max_ripple_stopband, published * kRippleRoundingSlack);
+  }
+}
+
+TEST(CircularCoefficients, DiscEdgeIsAtCentreOfTransitionBand) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    // Independent of the closed form: walk a diagonal ray through the complex product F(x) F(y).
+    double crossing_u = 0.0;
+    for (int i = 1; i < 20000; ++i) {
+      const double u = i * 1e-4, t = u / std::numbers::sqrt2;
+      double k = 0.0;
+      for (const CircularComponent& c : circular_components(n)) {
+        const std::complex<double> f = std::polar(std::exp(-c.a * t * t), c.b * t * t);
+        const std::complex<double> p = f * f;
+        k += c.A * p.real() + c.B * p.imag();
+      }
+      if (u > kPassbandEndU && k < 0.5) {
+        crossing_u = u;
+        break;
+      }
+    }
+    EXPECT_NEAR(crossing_u, kDiscEdgeU, 0.005) << n << " components";
+  }
+}
+
+TEST(CircularCoefficients, SampledKernelStaysWithinRippleOutsideTransitionBand) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    const CircularKernel k = make_circular_kernel_for_disc(n, 40.0);
+    const double bound = kPublishedRipple[n - 1] * kRippleRoundingSlack + 2e-5;  // + float taps
+    for (int y = 0; y <= k.radius_px; ++y)
+      for (int x = 0; x <= k.radius_px; ++x) {
+        const double u = k.u_per_px * std::hypot(x, y), v = kernel_2d(k, x, y) * k.normalisation;
+        if (u <= kPassbandEndU) {
+          EXPECT_LE(std::abs(v - 1.0), bound) << n << " components at u = " << u;
+        } else if (u >= kStopbandStartU) {
+          EXPECT_LE(std::abs(v), bound) << n << " components at u = " << u;
+        }
+      }
+  }
+}
+
+TEST(CircularConvolve, PointLightMakesDiscOfRequestedRadius) {
+  for (int n = 1; n <= kMaxCircularComponents; ++n)
+    for (double disc : {3.0, 6.0, 12.5, 25.0}) {
+      const CircularKernel k = make_circular_kernel_for_disc(n, disc);
+      const int size = 2 * k.radius_px + 9, c = size / 2;
+      Image point(size, size, 1);
+      *point.px(c, c) = 1.0f;
+      const Image out = circular_convolve(point, k);
+      double total = 0.0;
+      for (float v : out.pixels) total += v;
+      EXPECT_NEAR(total, 1.0, 1e-5);
+      const double measured = half_plateau_radius(out, 0, c, c, disc);
+      // The continuous profile crosses 1/2 at u = 1.100..1.103 (<= 0.3% past the edge at 1.1); the
+      // plateau estimate and linear interpolation of the sampled edge add a few hundredths of a pixel.
+      const double tolerance_px = 0.005 * disc + 0.05;
+      EXPECT_NEAR(measured, disc, tolerance_px) << n << " components";
+    }
+}
+
+TEST(CircularConvolve, ConstantImageStaysConstant) {
+  Image flat(40, 34, 3);
+  for (int y = 0; y < flat.height; ++y)
+    for (int x = 0; x < flat.width; ++x) {
+      float* p = flat.px(x, y);
+      p[0] = 0.3f, p[1] = 0.7f, p[2] = 1.9f;
+    }
+  for (int n = 1; n <= kMaxCircularComponents; ++n) {
+    const CircularKernel k = make_circular_kernel_for_disc(n, 7.0);
+    const Image out = circular_convolve(flat, k);
+    for (int y = k.radius_px; y < flat.height - k.radius_px; ++y)
+      for (int x = k.radius_px; x < flat.width - k.radius_px; ++x)
+        for (int ch = 0; ch < 3; ++ch)
+          ASSERT_NEAR(out.px(x, y)[ch], flat.px(x, y)[ch], 1e-5 * flat.px(x, y)[ch])
+              << n << " components at (" << x << ", " << y << ")";
+  }
+}
+
+TEST(CircularConvolve, Bracketed10WithinQuantisationBound) {
+  const float max_value = 4.0f;  // HDR: bracketing rescales by the per-channel max M
+  const Image img = random_image(48, 40, 3, 0.0f, max_value, 17);
+  for (int n : {1, 2, 4, 6}) {
+    const CircularKernel k = make_circular_kernel_for_disc(n, 6.0);
+    const Image exact = circular_convolve(img, k, IntermediatePrecision::f32);
+    const Image bracketed = circular_convolve(img, k, IntermediatePrecision::bracketed10);
+    // Per stored part: 10-bit rounding of I' / M costs S M / 1023 / 2 after I = S I' + O sum(J);
+    // the f16 box sum sum(J) / M <= 2R + 1 costs |O| (2R + 1) M 2^-11.
+    std::vector<double> err_re, err_im;
+    const double m = max_value, taps = k.tap_count();
+    for (int c = 0; c < n; ++c)
+      for (int part = 0; part < 2; ++part) {
+        double o = 1e30, s = 0.0;
+        for (std::complex<float> t : k.taps[c]) o = std::min(o, double(part ? t.imag() : t.real()));
+        for (std::complex<float> t : k.taps[c]) s += (part ? t.imag() : t.real()) - o;
+        (part ? err_im : err_re).push_back(s * m / 1023.0 / 2.0 + std::abs(o) * taps * m * std::ldexp(1.0, -11));
+      }
+    const double bound = propagate_storage_error(k, err_re, err_im) + 1e-4 * m;  // + f32 arithmetic
+    const double err = max_abs_diff(exact, bracketed);
+    EXPECT_LE(err, bound) << n << " components";
+    EXPECT_GT(err, 0.0) << n << " components: quantisation should show";
+    std::printf("[bracketed10] %d components: max error %.3g, bound %.3g\n", n, err, bound);
+  }
+  Image negative(4, 4, 3, -1.0f);
+  EXPECT_THROW(circular_convolve(negative, make_circular_kernel(1, 2), IntermediatePrecision::bracketed10),
+               std::invalid_argument);
+}
+
+TEST(CircularConvolve, F16WithinHalfPrecisionBound) {
+  const float max_value = 4.0f;
+  const Image img = random_image(48, 40, 3, 0.0f, max_value, 5);
+  for (int n : {1, 2, 4, 6}) {
+    const CircularKernel k = make_circular_kernel_for_disc(n, 6.0);
+    const Image exact = circular_convolve(img, k, IntermediatePrecision::f32);
+    const Image half = circular_convolve(img, k, IntermediatePrecision::f16);
+    // A stored part |H| <= M sum |G| rounds to half with relative error <= 2^-11.
+    std::vector<double> err_re, err_im;
+    for (int c = 0; c < n; ++c) {
+      double re = 0.0, im = 0.0;
+      for (std::complex<float> t : k.taps[c]) re += std::abs(t.real()), im += std::abs(t.imag());
+      err_re.push_back(re * max_value * std::ldexp(1.0, -11));
+      err_im.push_back(im * max_value * std::ldexp(1.0, -11));
+    }
+    const double bound = propagate_storage_error(k, err_re, err_im) + 1e-4 * max_value;
+    const double err = max_abs_diff(exact, half);
+    EXPECT_LE(err, bound) << n << " components";
+    std::printf("[f16] %d components: max error %.3g, bound %.3g\n", n, err, bound);
+  }
+}
+
+struct LayeredScene {
+  Image color, radius_px, depth_m;
+};
+
+LayeredScene layered_scene(int w, int h, float radius, float depth) {
+  return {random_image(w, h, 3, 0.0f, 2.0f, 3), Image(w, h, 1, radius), Image(w, h, 1, depth)};
+}
+
+constexpr double kFocus_m = 3.0;
+
+TEST(CircularBlur, ZeroRadiiGiveTheInputBack) {
+  const LayeredScene s = layered_scene(32, 24, 0.0f, 1.0f);
+  for (IntermediatePrecision p :
+       {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
+    const Image out = circular_blur(s.color, s.radius_px, s.depth_m, kFocus_m, {1, 2, 8, p});
+    EXPECT_EQ(out.pixels, s.color.pixels) << to_string(p);
+  }
+}
+
+TEST(CircularBlur, UniformFullBlurEqualsPlainConvolution) {
+  const CircularFilterConfig config{1, 3, 5, IntermediatePrecision::f32};
+  for (float depth : {1.0f, 10.0f}) {  // all near, then all far: alpha 1, so rgb_b / a_b is the blur
+    const LayeredScene s = layered_scene(30, 26, 5.0f, depth);
+    const Image out = circular_blur(s.color, s.radius_px, s.depth_m, kFocus_m, config);
+    const int n = depth < kFocus_m ? config.near_components : config.far_components;
+    const Image reference = circular_convolve(s.color, make_circular_kernel_for_disc(n, config.max_radius_px));
+    EXPECT_LT(max_abs_diff(out, reference), 1e-4) << "depth " << depth;
+  }
+}
+
+TEST(CircularBlur, FarFieldStaysBehindSharpPixelsNearFieldSpreadsOverThem) {
+  const int w = 48, h = 20, edge = 24, max_radius = 6;
+  for (float side_depth : {10.0f, 1.0f}) {
+    LayeredScene s = layered_scene(w, h, 0.0f, static_cast<float>(kFocus_m));
+    for (int y = 0; y < h; ++y)
+      for (int x = edge; x < w; ++x) *s.radius_px.px(x, y) = max_radius, *s.depth_m.px(x, y) = side_depth;
+    const CircularFilterConfig config{1, 2, max_radius, IntermediatePrecision::f32};
+    const Image out = circular_blur(s.color, s.radius_px, s.depth_m, kFocus_m, config);
+    const int kernel_radius = make_circular_kernel_for_disc(1, max_radius).radius_px;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < edge; ++x) {
+        const bool reached = side_depth < kFocus_m && edge - x <= kernel_radius;
+        if (reached) continue;
+        for (int c = 0; c < 3; ++c)
+          ASSERT_EQ(out.px(x, y)[c], s.color.px(x, y)[c]) << "depth " << side_depth << " x " << x;
+      }
+    if (side_depth < kFocus_m) {  // the near field's blurred alpha is about 1/2 right at its edge
+      double change = 0.0;
+      for (int c = 0; c < 3; ++c) change += std::abs(out.px(edge - 1, h / 2)[c] - s.color.px(edge - 1, h / 2)[c]);
+      EXPECT_GT(change, 0.05);
+    }
+  }
+}
+
+TEST(CircularCost, CountsTapsAndIntermediateBytes) {
+  const CircularCost f32 = circular_cost(2, 10, IntermediatePrecision::f32);
+  EXPECT_EQ(f32.passes, 2);
+  EXPECT_EQ(f32.taps_per_pixel, 2 * 2 * 21);
+  EXPECT_EQ(f32.intermediate_bytes_per_pixel, 2 * 2 * 3 * 4);
+  EXPECT_EQ(circular_cost(2, 10, IntermediatePrecision::f16).intermediate_bytes_per_pixel, 2 * 2 * 3 * 2);
+  EXPECT_EQ(circular_cost(2, 10, IntermediatePrecision::bracketed10).intermediate_bytes_per_pixel, 2 * 8 + 8);
+  EXPECT_EQ(circular_cost(1, 10, IntermediatePrecision::bracketed10, 4).intermediate_bytes_per_pixel, 12 + 8);
+}
+
+TEST(CircularPrecision, NamesRoundTrip) {
+  for (IntermediatePrecision p :
+       {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10})
+    EXPECT_EQ(intermediate_precision_from_string(to_string(p)), p);
+  EXPECT_THROW(intermediate_precision_from_string("f8"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace bokeh

@@ -1,0 +1,140 @@
+// GPU passes against the CPU references, on small procedural scenes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "coc.hpp"
+#include "run.hpp"
+#include "scene.hpp"
+
+namespace bokeh {
+namespace {
+
+// Largest per-channel difference relative to the reference's largest value.
+double max_rel_error(const Image& a, const Image& ref) {
+  double max_ref = 0, max_diff = 0;
+  for (std::size_t i = 0; i < ref.pixels.size(); ++i) {
+    max_ref = std::max(max_ref, std::abs(double(ref.pixels[i])));
+    max_diff = std::max(max_diff, std::abs(double(a.pixels[i]) - ref.pixels[i]));
+  }
+  return max_diff / max_ref;
+}
+
+vk::Context& context() {
+  static vk::Context ctx;
+  return ctx;
+}
+
+struct Case {
+  const char* scene;
+  int size_n, spacing_px;
+};
+
+class GpuMatchesCpu : public ::testing::TestWithParam<Case> {};
+
+TEST_P(GpuMatchesCpu, CocPassPacksLikeCpu) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 96, 64);
+  const GatherPattern pattern{c.size_n, c.spacing_px};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  auto filter = find_method("naive").make_gpu(frame, {pattern, "f32"});
+  vk::TimestampQueries timer(context(), 8);
+  gpu::run_frames(frame, *filter, timer);
+  const Image gpu_packed = frame.read_packed();
+  const CocInput cpu = cpu_coc_pass(s.color, s.depth_m, lens, pattern);
+  for (std::size_t i = 0; i < cpu.packed.pixels.size(); ++i)
+    ASSERT_NEAR(gpu_packed.pixels[i], cpu.packed.pixels[i], 1e-6f * std::max(1.0f, std::abs(cpu.packed.pixels[i])))
+        << "texel " << i / 4 << " channel " << i % 4;
+}
+
+TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 96, 64);
+  const FilterOptions options{{c.size_n, c.spacing_px}, "f32"};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px() * 1.2);
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options, 2);
+  for (const char* method : {"naive", "flag"}) {
+    const Image gpu = run_gpu(context(), find_method(method), s.color, s.depth_m, lens, options);
+    EXPECT_LT(max_rel_error(gpu, reference), 1e-5) << method;
+  }
+}
+
+// RGBA16F layers: every stored layer value is a sum of non-negative terms rounded once to half,
+// and the output is a sum of such values, so each output channel keeps the relative error of one
+// rounding: 2^-11 when rounding to nearest (the CPU emulation), 2^-10 (one ulp) when the driver
+// rounds toward zero, which Vulkan permits for float->half conversion (lavapipe does). Plus f32
+// summation noise and half's subnormal floor.
+TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 96, 64);
+  const FilterOptions f32{{c.size_n, c.spacing_px}, "f32"};
+  const FilterOptions f16{{c.size_n, c.spacing_px}, "f16"};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, f32.pattern.max_radius_px());
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, f32, 2);
+  const Image gpu16 = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, f16);
+  const Image cpu16 = run_cpu(find_method("flag"), s.color, s.depth_m, lens, f16, 2);
+  const double round_to_nearest = std::ldexp(1.0, -11), round_toward_zero = std::ldexp(1.0, -10);
+  for (std::size_t i = 0; i < reference.pixels.size(); ++i) {
+    const double ref = std::abs(reference.pixels[i]);
+    ASSERT_LE(std::abs(gpu16.pixels[i] - reference.pixels[i]), round_toward_zero * ref * (1 + 1e-3) + 1e-6)
+        << "GPU, value " << i;
+    ASSERT_LE(std::abs(cpu16.pixels[i] - reference.pixels[i]), round_to_nearest * ref * (1 + 1e-3) + 1e-6)
+        << "CPU f16 emulation, value " << i;
+  }
+}
+
+// Extremes a user will hit: they must give finite, bounded results or a failure the harness
+// measures, never a crash or a silent NaN.
+
+// An HDR highlight above half-float's largest finite value (65504). f32 layers keep it exactly;
+// RGBA16F layers cannot: the driver either saturates (lavapipe rounds toward zero, to 65504) or
+// overflows to inf. Either way the loss is visible in the numbers the harness reports.
+TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
+  Image color(32, 24, 3, 0.5f);
+  Image depth(32, 24, 1, 3.0f);  // everything in focus: radius 0, output = input in exact arithmetic
+  for (int c = 0; c < 3; ++c) color.px(16, 12)[c] = 1e5f;
+  const Lens lens;
+  const Image f32 = run_gpu(context(), find_method("flag"), color, depth, lens, {{9, 2}, "f32"});
+  EXPECT_EQ(f32.px(16, 12)[0], 1e5f);
+  const Image f16 = run_gpu(context(), find_method("flag"), color, depth, lens, {{9, 2}, "f16"});
+  const float v = f16.px(16, 12)[0];
+  EXPECT_FALSE(std::isnan(v));
+  EXPECT_TRUE(std::isinf(v) || v <= 65504.0f) << "f16 layers cannot hold 1e5: got " << v;
+  // Elsewhere the image is untouched (radius 0: nothing spreads).
+  EXPECT_NEAR(f16.px(3, 3)[1], 0.5f, 0.5f * std::ldexp(1.0f, -10));
+}
+
+// Near-zero depth makes equation (1) blow up; the CoC pass clamps it to the max radius.
+TEST(GpuExtremes, NearZeroDepthClampsToTheMaxRadius) {
+  Scene s = make_scene("hoops", 48, 32);
+  for (int x = 0; x < 48; ++x) *s.depth_m.px(x, 16) = 1e-7f;
+  const FilterOptions options{{7, 2}, "f32"};
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, s.lens, options, 2);
+  for (const char* method : {"naive", "flag"}) {
+    const Image out = run_gpu(context(), find_method(method), s.color, s.depth_m, s.lens, options);
+    for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v)) << method;
+    EXPECT_LT(max_rel_error(out, reference), 1e-5) << method;
+  }
+}
+
+// Circles far larger than the image: every pixel's disc leaves the frame on all sides.
+TEST(GpuExtremes, RadiiLargerThanTheImage) {
+  const Scene s = make_scene("pillars", 40, 24);
+  const FilterOptions options{{61, 4}, "f32"};  // max radius 120 px on a 40x24 image
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px());
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options, 2);
+  const Image out = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, options);
+  EXPECT_LT(max_rel_error(out, reference), 1e-5);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, GpuMatchesCpu,
+                         ::testing::Values(Case{"hoops", 9, 2}, Case{"pillars", 7, 3}, Case{"points", 11, 1},
+                                           Case{"hoops", 1, 2}),
+                         [](const auto& info) {
+                           return std::string(info.param.scene) + "_N" + std::to_string(info.param.size_n) + "_k" +
+                                  std::to_string(info.param.spacing_px);
+                         });
+
+}  // namespace
+}  // namespace bokeh

@@ -1,0 +1,270 @@
+// The interleaved runner on fake targets with known times (no GPU), and the sweep's axes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "runner.hpp"
+#include "sweep.hpp"
+
+namespace bokeh {
+namespace {
+
+using runner::Policy;
+using runner::RunRecord;
+using runner::Sample;
+
+// A target whose frames take `ms` (plus a repeating jitter), logging every visit.
+struct Log {
+  std::vector<std::size_t> visits;  // point index per measured sample, in order
+  std::map<std::size_t, int> warm_ups;
+  std::map<std::size_t, std::size_t> frames_measured;  // per point, over all its targets (jitter index)
+};
+
+class FakeTarget : public runner::Target {
+ public:
+  FakeTarget(std::size_t index, double ms, std::vector<double> jitter, Log& log, std::uint64_t bytes = 0)
+      : index_(index), ms_(ms), jitter_(std::move(jitter)), log_(log), bytes_(bytes) {}
+  void warm_up() override { ++log_.warm_ups[index_]; }
+  Sample measure(int frames) override {
+    // Warm-up frames come one at a time; samples have frames_hint frames (the tests use times that
+    // need more than one).
+    if (frames == frames_hint_) log_.visits.push_back(index_);
+    const double j = jitter_.empty() ? 0.0 : jitter_[log_.frames_measured[index_]++ % jitter_.size()];
+    return {ms_ * (1 + j), {{"pass", ms_ * (1 + j)}}};
+  }
+  std::uint64_t resident_bytes() const override { return bytes_; }
+  int frames_hint_ = 0;
+
+ private:
+  std::size_t index_;
+  double ms_;
+  std::vector<double> jitter_;
+  Log& log_;
+  std::uint64_t bytes_;
+};
+
+// Runs `times.size()` fake points: point i's frames take times[i] ms.
+struct Harness {
+  Log log;
+  std::vector<std::vector<double>> jitter;
+  std::uint64_t bytes = 0;
+  std::vector<std::string> fail_on_prepare;  // per point: throw this text from prepare
+
+  RunRecord run(const std::vector<double>& times, const Policy& policy, const std::vector<std::string>& skip = {},
+                std::function<void(const RunRecord&)> checkpoint = {}) {
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < times.size(); ++i) names.push_back("p" + std::to_string(i));
+    runner::Hooks hooks;
+    hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
+      if (i < fail_on_prepare.size() && !fail_on_prepare[i].empty()) throw std::runtime_error(fail_on_prepare[i]);
+      auto t = std::make_unique<FakeTarget>(i, times[i], i < jitter.size() ? jitter[i] : std::vector<double>{}, log,
+                                            bytes);
+      // Frames per sample follow from the pilot: ceil(sample_min_ms / ms).
+      t->frames_hint_ = std::clamp(static_cast<int>(std::ceil(policy.sample_min_ms / times[i])), 1,
+                                   policy.max_frames_per_sample);
+      return t;
+    };
+    hooks.checkpoint = std::move(checkpoint);
+    return runner::run(names, skip, policy, hooks);
+  }
+};
+
+Policy fast_policy() {
+  Policy p;
+  p.budget_s = 1e9;  // stop by settling, not by the clock
+  p.min_samples = 3;
+  p.max_samples = 6;
+  p.sample_min_ms = 10;
+  p.warm_up_max_s = 0;
+  return p;
+}
+
+TEST(Runner, EveryPointGetsItsFirstSampleBeforeAnyGetsItsSecond) {
+  Harness h;
+  h.jitter = {{0.0, 0.3}, {0.0, 0.3}, {0.0, 0.3}, {0.0, 0.3}, {0.0, 0.3}};  // never settles: max_samples rounds
+  const RunRecord r = h.run({1, 2, 3, 4, 5}, fast_policy());
+  ASSERT_EQ(r.status, "complete");
+  ASSERT_EQ(r.round_order.size(), 6u);
+  // The log, cut into rounds, is exactly the recorded order, and each round visits every point once.
+  ASSERT_EQ(h.log.visits.size(), 30u);
+  std::set<std::vector<std::size_t>> distinct;
+  for (std::size_t round = 0; round < r.round_order.size(); ++round) {
+    const std::vector<std::size_t> visited(h.log.visits.begin() + 5 * round, h.log.visits.begin() + 5 * (round + 1));
+    EXPECT_EQ(visited, r.round_order[round]) << "round " << round;
+    std::vector<std::size_t> sorted = visited;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(sorted, (std::vector<std::size_t>{0, 1, 2, 3, 4}));
+    distinct.insert(visited);
+  }
+  EXPECT_GT(distinct.size(), 1u) << "the order is shuffled anew each round";
+  for (const auto& p : r.points) {
+    EXPECT_EQ(p.samples.size(), 6u);
+    EXPECT_EQ(p.sample_round, (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  }
+}
+
+TEST(Runner, TheSeedFixesTheOrder) {
+  Harness a, b, c;
+  Policy p = fast_policy();
+  const auto ra = a.run({1, 2, 3, 4, 5, 6}, p), rb = b.run({1, 2, 3, 4, 5, 6}, p);
+  p.seed = 2;
+  const auto rc = c.run({1, 2, 3, 4, 5, 6}, p);
+  EXPECT_EQ(ra.round_order, rb.round_order);
+  EXPECT_NE(ra.round_order, rc.round_order);
+}
+
+TEST(Runner, KnownTimesComeBackAsMediansAndFramesFillASample) {
+  Harness h;
+  const RunRecord r = h.run({0.5, 4, 25}, fast_policy());
+  const double expected[] = {0.5, 4, 25};
+  const int frames[] = {20, 3, 1};  // ceil(10 ms / t)
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_DOUBLE_EQ(runner::distribution(r.points[i].frame_ms()).median, expected[i]);
+    EXPECT_EQ(r.points[i].frames_per_sample, frames[i]);
+    EXPECT_TRUE(r.points[i].settled);
+    EXPECT_EQ(r.points[i].samples.size(), 3u) << "steady points leave after min_samples";
+  }
+}
+
+TEST(Runner, NoisyPointsStayUntilMaxSamplesSteadyOnesLeave) {
+  Harness h;
+  h.jitter = {{}, {0.0, 0.5, -0.3}};
+  const RunRecord r = h.run({2, 2}, fast_policy());
+  EXPECT_EQ(r.points[0].samples.size(), 3u);
+  EXPECT_EQ(r.points[1].samples.size(), 6u);
+  EXPECT_EQ(r.round_order.back(), (std::vector<std::size_t>{1}));
+}
+
+TEST(Runner, SkippedPointsKeepTheirReasonAndAreNeverPrepared) {
+  Harness h;
+  h.fail_on_prepare = {"", "needs 2 GiB, over the device's limit", ""};
+  const RunRecord r = h.run({1, 1, 1}, fast_policy(), {"", "", "over --max-buffer-mb 1 (not allocated)"});
+  EXPECT_TRUE(r.points[0].skipped.empty());
+  EXPECT_EQ(r.points[1].skipped, "needs 2 GiB, over the device's limit");
+  EXPECT_EQ(r.points[2].skipped, "over --max-buffer-mb 1 (not allocated)");
+  EXPECT_EQ(r.points[2].preparations, 0);
+  EXPECT_TRUE(r.points[1].samples.empty());
+  for (const auto& round : r.round_order) EXPECT_EQ(std::count(round.begin(), round.end(), 2u), 0);
+  EXPECT_EQ(r.points[0].samples.size(), 3u);
+}
+
+TEST(Runner, AnInterruptionKeepsEverySampleTakenSoFar) {
+  Harness h;
+  h.jitter = {{0.0, 0.3}, {0.0, 0.3}, {0.0, 0.3}};
+  std::size_t checkpoints = 0;
+  runner::InterruptScope scope;
+  const RunRecord r = h.run({1, 1, 1}, fast_policy(), {}, [&](const RunRecord& partial) {
+    ++checkpoints;
+    EXPECT_EQ(partial.status, "partial");
+    if (checkpoints == 7) runner::request_interrupt();  // as SIGINT during the third round
+  });
+  EXPECT_EQ(r.status, "interrupted");
+  EXPECT_EQ(h.log.visits.size(), 7u);
+  std::size_t samples = 0;
+  for (const auto& p : r.points) samples += p.samples.size();
+  EXPECT_EQ(samples, 7u);
+  for (const auto& p : r.points) EXPECT_GE(p.samples.size(), 2u);
+}
+
+TEST(Runner, TargetsOverTheResidentLimitAreFreedAndPreparedAgain) {
+  Harness h;
+  h.bytes = 100;
+  h.jitter = {{0.0, 0.3}, {0.0, 0.3}, {0.0, 0.3}};
+  Policy p = fast_policy();
+  p.resident_limit_bytes = 150;  // one target at a time
+  const RunRecord r = h.run({1, 1, 1}, p);
+  int preparations = 0;
+  for (const auto& pt : r.points) {
+    preparations += pt.preparations;
+    EXPECT_EQ(pt.samples.size(), 6u);
+  }
+  EXPECT_GT(preparations, 3);
+  for (const auto& [i, n] : h.log.warm_ups) EXPECT_GE(n, 1);
+}
+
+TEST(Runner, TheBudgetStopsRoundsOnceEveryPointHasItsMinimum) {
+  Harness h;
+  h.jitter = {{0.0, 0.3}, {0.0, 0.3}};
+  Policy p = fast_policy();
+  p.budget_s = 0;  // spent from the start
+  const RunRecord r = h.run({1, 1}, p);
+  for (const auto& pt : r.points) EXPECT_EQ(pt.samples.size(), 3u);
+}
+
+TEST(Runner, DistributionMatchesHandComputedQuartiles) {
+  const runner::Distribution d = runner::distribution({4, 1, 3, 2, 5});
+  EXPECT_DOUBLE_EQ(d.median, 3);
+  EXPECT_DOUBLE_EQ(d.q1, 2);
+  EXPECT_DOUBLE_EQ(d.q3, 4);
+  EXPECT_DOUBLE_EQ(d.min, 1);
+  EXPECT_DOUBLE_EQ(d.max, 5);
+  EXPECT_DOUBLE_EQ(d.mean, 3);
+  EXPECT_NEAR(d.relative_iqr(), 2.0 / 3.0, 1e-12);
+}
+
+// ---- The sweep's axes (the real registry; nothing is measured). ----
+
+TEST(Axes, ProductOfAxesLessWhatAMethodDoesNotAccept) {
+  Axes axes;
+  axes.methods = {"naive", "flag"};
+  axes.backends = {"gpu", "cpu"};
+  axes.patterns = {{9, 2}, {13, 2}};
+  axes.precisions = {"all"};
+  axes.scales = {0};
+  const auto points = expand(axes);
+  // naive: 1 precision x 1 scale; flag: every precision x every scale; x 2 backends x 2 patterns.
+  const Method& flag = find_method("flag");
+  EXPECT_EQ(points.size(), (1 + flag.precisions.size() * flag.buffer_scales.size()) * 2 * 2);
+  std::set<std::string> ids;
+  for (const auto& p : points) ids.insert(p.id);
+  EXPECT_EQ(ids.size(), points.size()) << "ids are unique";
+  EXPECT_TRUE(ids.count("flag/cpu/hoops/800x600/N:13/k:2/r11g11b10f/scale:1-4"));
+  EXPECT_TRUE(ids.count("naive/gpu/hoops/800x600/N:9/k:2/f32"));
+}
+
+TEST(Axes, ListedPrecisionsApplyWhereAcceptedAndDefaultsElsewhere) {
+  Axes axes;
+  axes.methods = {"naive", "flag"};
+  axes.patterns = {{9, 2}};
+  axes.precisions = {"f32"};
+  for (const auto& p : expand(axes)) EXPECT_EQ(p.options.precision, "f32") << p.id;
+  axes.precisions = {};
+  for (const auto& p : expand(axes)) EXPECT_EQ(p.options.precision, p.method->precisions.front()) << p.id;
+}
+
+TEST(Axes, MethodsThatOnlySeeTheLargestRadiusTakeOnePatternPerRadius) {
+  Axes axes;
+  axes.methods = {"circular2"};
+  axes.patterns = {{41, 2}, {21, 4}, {11, 8}, {9, 2}};  // radii 40, 40, 40, 8
+  const auto points = expand(axes);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_EQ(points[0].options.pattern.size_n, 41);
+  EXPECT_EQ(points[1].options.pattern.size_n, 9);
+}
+
+TEST(Axes, OptionsAreFixedWhenGivenAndSweptOnRequest) {
+  Axes axes;
+  axes.methods = {"circular2"};
+  axes.patterns = {{9, 2}};
+  axes.option_values = {{"near_components", 1}};
+  const auto points = expand(axes);
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_EQ(points[0].options.integer("near_components"), 1);
+  EXPECT_NE(points[0].id.find("near_components:1"), std::string::npos) << points[0].id;
+}
+
+TEST(Axes, MaxCocFollowsThePatternUnlessFixed) {
+  Axes axes;
+  axes.methods = {"naive"};
+  axes.patterns = {{9, 2}, {21, 2}};
+  auto points = expand(axes);
+  EXPECT_EQ(points[0].max_coc_px, 8);
+  EXPECT_EQ(points[1].max_coc_px, 20);
+  axes.max_coc_px = 12;
+  for (const auto& p : expand(axes)) EXPECT_EQ(p.max_coc_px, 12);
+}
+
+}  // namespace
+}  // namespace bokeh
