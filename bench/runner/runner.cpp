@@ -132,6 +132,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
   std::map<std::size_t, std::unique_ptr<Target>> live;
   std::list<std::size_t> recency;  // least recently visited first
   std::vector<double> last_visit_s(names.size(), 0.0);
+  std::map<std::string, int> probe_frames;
   std::size_t visits = 0;
 
   auto drop = [&](std::size_t i) {
@@ -160,8 +161,11 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     std::shuffle(order.begin(), order.end(), rng);
     record.round_order.push_back(order);
     for (auto& [name, probe] : hooks.probes) {
-      if (round == 0) probe->warm_up();
-      record.probe_ms[name].push_back(probe->measure(1).frame_ms);
+      if (round == 0) {
+        PointRecord warm;
+        probe_frames[name] = frames_for(warm_up(*probe, policy, warm), policy);
+      }
+      record.probe_ms[name].push_back(probe->measure(probe_frames[name]).frame_ms);
     }
     for (std::size_t i : order) {
       if (interrupted()) break;

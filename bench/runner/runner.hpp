@@ -36,7 +36,7 @@ class Target {
 
 struct Policy {
   double budget_s = 60;                // measuring time to aim for, all points together
-  int min_samples = 3;
+  int min_samples = 5;  // fewer make a poor IQR (with 3, the IQR is half the range)
   int max_samples = 15;
   double settled_relative_iqr = 0.05;
   double sample_min_ms = 60;           // a sample runs enough frames to last at least this long
