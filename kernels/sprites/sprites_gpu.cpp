@@ -13,13 +13,6 @@ namespace {
 
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
 
-// Mirrors `Counters` in shaders/sprites/detect.comp: the indirect draw's arguments first.
-struct Counters {
-  VkDrawIndirectCommand draw;
-  std::uint32_t overflowed;
-  std::uint32_t quad_pixels_low, quad_pixels_high;  // a 64-bit count: frames can rasterise over 2^32 pixels
-};
-
 // Mirrors the push constants of shaders/sprites/quad.vert.
 struct TargetSize {
   std::int32_t width_px, height_px;
@@ -30,7 +23,7 @@ class SpritesGpu final : public gpu::GpuFilter {
   SpritesGpu(gpu::GpuFrame& frame, const FilterOptions& options, const SpriteSettings& settings)
       : frame_(frame),
         max_sprites_(settings.max_sprites),
-        counters_(frame.ctx, sizeof(Counters),
+        counters_(frame.ctx, sizeof(SpriteCounters),
                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                       VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT),
         sprites_(vk::make_storage_buffer(frame.ctx, std::max(1, settings.max_sprites) * sizeof(Sprite),
@@ -58,7 +51,7 @@ class SpritesGpu final : public gpu::GpuFilter {
                          VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT |
                              VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                          VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 0, nullptr);
-    const Counters reset{{6, 0, 0, 0}, 0, 0, 0};
+    const SpriteCounters reset{{6, 0, 0, 0}, 0, 0, 0};
     vkCmdUpdateBuffer(cmd, counters_.get(), 0, sizeof(reset), &reset);
     barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
     barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
@@ -82,7 +75,7 @@ class SpritesGpu final : public gpu::GpuFilter {
   }
 
   nlohmann::json stats() override {
-    Counters c{};
+    SpriteCounters c{};
     vk::download(frame_.ctx, counters_, &c, sizeof(c));
     SpriteStats s;
     s.drawn = c.draw.instanceCount;

@@ -20,7 +20,7 @@ SpriteSettings settings_of(const FilterOptions& o) {
   return s;
 }
 
-constexpr std::uint64_t kCounterBytes = 24;  // VkDrawIndirectCommand + overflow + 64-bit pixel count
+constexpr std::uint64_t kCounterBytes = sizeof(SpriteCounters);
 
 }  // namespace
 
@@ -33,7 +33,7 @@ void declare_sprites(std::vector<Method>& methods) {
   m.precisions = {"f32"};
   m.options = {
       {"sprite_threshold", "Sprites: luminance above the 8 neighbours' mean that makes a pixel a sprite (linear units)",
-       1.0, 0.0, 1e6, false, {}, {0.25, 1.0, 4.0}},
+       1.0, 0.0, 1e6, false, {}, {1.0, 10.0}},
       {"sprite_min_radius", "Sprites: smallest CoC radius in px drawn as a sprite (Unreal's r.DOF.Scatter.MinCocRadius)",
        3.0, 0.0, 1e4, false},
       {"max_sprites", "Sprites: most sprites a frame draws; more are counted as overflow and left in the gather",
