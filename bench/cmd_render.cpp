@@ -72,21 +72,23 @@ void render(RenderOptions& o) {
              options.pattern.max_radius_px(),
              scene.lens.f_stop, scene.lens.focus_distance_m);
   Image result;
+  nlohmann::json stats;
   if (o.backend == "gpu") {
-    vk::Context ctx(o.device);
+    vk::Context ctx(o.device, method.needs(options));
     std::vector<vk::PassTime> passes;
-    result = run_gpu(ctx, method, scene.color, scene.depth_m, scene.lens, options, &passes);
+    result = run_gpu(ctx, method, scene.color, scene.depth_m, scene.lens, options, &passes, &stats);
     fmt::print("device: {} ({})\n", ctx.info().name, ctx.info().driver_info);
     for (const auto& p : passes) fmt::print("  {:<12} {:9.3f} ms\n", p.pass, p.ms);
     fmt::print("  {:<12} {:9.3f} ms (one frame after warm-up)\n", "frame", vk::frame_ms(passes));
   } else if (o.backend == "cpu") {
     const auto start = std::chrono::steady_clock::now();
-    result = run_cpu(method, scene.color, scene.depth_m, scene.lens, options, default_cpu_threads());
+    result = run_cpu(method, scene.color, scene.depth_m, scene.lens, options, default_cpu_threads(), &stats);
     fmt::print("  cpu frame {:9.3f} ms\n",
                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   } else {
     throw std::invalid_argument("--backend must be gpu or cpu");
   }
+  for (const auto& [key, value] : stats.items()) fmt::print("  {:<20} {}\n", key, value.dump());
   write_image(result, o.out_path);
   fmt::print("wrote {}\n", o.out_path);
   if (o.compare) write_comparison(scene, result, options.pattern.max_radius_px(), o);

@@ -4,6 +4,8 @@
 #include <memory>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "coc.hpp"
 #include "gather_pattern.hpp"
 #include "image.hpp"
@@ -47,6 +49,9 @@ class GpuFilter {
   virtual void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) = 0;
   // Bytes of intermediate storage the filter allocated (driver's sizes), beyond the shared buffers.
   virtual std::uint64_t intermediate_bytes() const = 0;
+  // What the last frame found where it depends on the scene (e.g. sprite counts and overflow), read
+  // back after the frames, outside the timed region: an object, empty when there is nothing to report.
+  virtual nlohmann::json stats() { return nlohmann::json::object(); }
 };
 
 // Runs CoC + filter `frames` times in one timed submission (a batch long enough to swamp launch

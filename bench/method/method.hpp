@@ -56,6 +56,9 @@ struct CpuInput {
   const Image& packed;     // RGBA (rgb / discrete disc area, radius px)
   const FilterOptions& options;
   int threads;
+  // Where the reference records what it found that depends on the scene, with the keys its GPU
+  // driver's GpuFilter::stats() uses (null: not wanted).
+  nlohmann::json* stats = nullptr;
 };
 
 struct MemoryUse {

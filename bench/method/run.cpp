@@ -12,14 +12,15 @@ CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens
 }
 
 Image run_cpu(const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
-              const FilterOptions& options, int threads) {
+              const FilterOptions& options, int threads, nlohmann::json* stats) {
   check_options(method, options);
   const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern);
-  return method.cpu_reference({color, depth_m, lens, coc.radius_px, coc.packed, options, threads});
+  if (stats) *stats = nlohmann::json::object();
+  return method.cpu_reference({color, depth_m, lens, coc.radius_px, coc.packed, options, threads, stats});
 }
 
 Image run_gpu(vk::Context& ctx, const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
-              const FilterOptions& options, std::vector<vk::PassTime>* pass_times) {
+              const FilterOptions& options, std::vector<vk::PassTime>* pass_times, nlohmann::json* stats) {
   check_options(method, options);
   if (const std::string missing = ctx.unmet(method.needs(options)); !missing.empty())
     throw std::runtime_error(method.name + " needs " + missing + ", which " + ctx.info().name + " lacks");
@@ -30,6 +31,7 @@ Image run_gpu(vk::Context& ctx, const Method& method, const Image& color, const 
   gpu::warm_up(frame, *gpu_filter, timer);
   auto times = gpu::run_frames(frame, *gpu_filter, timer);
   if (pass_times) *pass_times = std::move(times);
+  if (stats) *stats = gpu_filter->stats();
   return frame.read_output();
 }
 

@@ -14,12 +14,14 @@ struct CocInput {
 };
 CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern);
 
-// The CPU reference, CoC pass included.
+// The CPU reference, CoC pass included. `stats` receives what it found (CpuInput::stats) if given.
 Image run_cpu(const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
-              const FilterOptions& options, int threads);
+              const FilterOptions& options, int threads, nlohmann::json* stats = nullptr);
 
-// One GPU frame (warmed up first). `pass_times` receives per-pass milliseconds if given.
+// One GPU frame (warmed up first). `pass_times` receives per-pass milliseconds and `stats` the
+// frame's statistics (GpuFilter::stats) if given.
 Image run_gpu(vk::Context& ctx, const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
-              const FilterOptions& options, std::vector<vk::PassTime>* pass_times = nullptr);
+              const FilterOptions& options, std::vector<vk::PassTime>* pass_times = nullptr,
+              nlohmann::json* stats = nullptr);
 
 }  // namespace bokeh

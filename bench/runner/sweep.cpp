@@ -168,6 +168,7 @@ class GpuTarget final : public runner::Target {
     timer_.count_invocations(false);
     return passes;
   }
+  nlohmann::json stats() { return filter_->stats(); }
 
  private:
   gpu::GpuFrame frame_;
@@ -180,13 +181,17 @@ class CpuTarget final : public runner::Target {
  public:
   CpuTarget(const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o, int threads)
       : method_(m), scene_(scene), lens_(lens), options_(o), threads_(threads) {}
-  void warm_up() override { output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_); }
+  void warm_up() override {
+    output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_, &stats_);
+  }
   runner::Sample measure(int frames) override {
     const auto start = std::chrono::steady_clock::now();
-    for (int f = 0; f < frames; ++f) output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_);
+    for (int f = 0; f < frames; ++f)
+      output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_, &stats_);
     return {std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / frames, {}};
   }
   const Image& output() const { return output_; }
+  const nlohmann::json& stats() const { return stats_; }
 
  private:
   const Method& method_;
@@ -195,6 +200,7 @@ class CpuTarget final : public runner::Target {
   FilterOptions options_;
   int threads_;
   Image output_;
+  nlohmann::json stats_ = nlohmann::json::object();
 };
 
 nlohmann::json distribution_json(const runner::Distribution& d) {
@@ -214,6 +220,7 @@ struct PointInfo {
   double f_stop = 0;
   nlohmann::json memory, work, error;
   nlohmann::json counters = nlohmann::json::object();  // GPU: per pass, commands and shader invocations
+  nlohmann::json stats = nlohmann::json::object();     // what the method found in the scene (GpuFilter::stats)
 };
 
 nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
@@ -248,7 +255,6 @@ nlohmann::json identity_json(const SweepPoint& p) {
 
 // The one serialisation of a measured point.
 nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, const PointInfo& info) {
-  const FilterOptions& o = p.options;
   std::vector<double> frame = rec.frame_ms();
   std::map<std::string, std::vector<double>> pass_values;
   for (const auto& s : rec.samples)
@@ -286,6 +292,7 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
           {"counters", info.counters},
           {"throughput", throughput},
           {"memory", info.memory},
+          {"stats", info.stats},
           {"error", info.error}});
   return out;
 }
@@ -416,7 +423,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   std::map<std::string, ExactReferences> exact;
   std::map<std::string, Image> extra;
 
-  auto first_ready = [&](std::size_t i, const Image& output) {
+  auto first_ready = [&](std::size_t i, const Image& output, const nlohmann::json& stats) {
+    info[i].stats = stats;
     const SweepPoint& p = points[i];
     const Scene& scene = scene_for(p);
     const Lens lens = lens_for(p);
@@ -444,14 +452,13 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   };
   hooks.first_ready = [&](std::size_t i, runner::Target& t) {
     if (auto* g = dynamic_cast<GpuTarget*>(&t)) {
-      info[i].counters = nlohmann::json::object();
       for (const auto& pass : g->counted_frame()) {
         info[i].counters[pass.pass] = {{"commands", pass.commands}};
         if (pass.invocations >= 0) info[i].counters[pass.pass]["compute_invocations"] = pass.invocations;
       }
-      first_ready(i, g->output());
+      first_ready(i, g->output(), g->stats());
     }
-    if (auto* c = dynamic_cast<CpuTarget*>(&t)) first_ready(i, c->output());
+    if (auto* c = dynamic_cast<CpuTarget*>(&t)) first_ready(i, c->output(), c->stats());
   };
   std::vector<CalibrationKernel> calibration;
   if (ctx)

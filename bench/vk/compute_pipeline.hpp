@@ -12,6 +12,7 @@
 #include "context.hpp"
 #include "handle.hpp"
 #include "memory.hpp"
+#include "pipeline_objects.hpp"
 
 namespace bokeh::vk {
 
@@ -29,15 +30,11 @@ class ComputePipeline {
                 std::uint32_t invocations_y) const;
 
  private:
-  void write_descriptor(std::uint32_t binding, VkDescriptorType type, const VkDescriptorBufferInfo* buffer,
-                        const VkDescriptorImageInfo* image);
-
   Context& ctx_;
   std::uint32_t push_constant_bytes_;
   std::uint32_t local_size_x_ = 8, local_size_y_ = 8;
   std::shared_ptr<PipelineObjects> shared_;
-  Handle<VkDescriptorPool> pool_;
-  VkDescriptorSet set_ = VK_NULL_HANDLE;
+  DescriptorSet set_;
 };
 
 }  // namespace bokeh::vk

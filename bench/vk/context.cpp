@@ -103,6 +103,12 @@ std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) 
                                                  VK_IMAGE_USAGE_STORAGE_BIT, 0, &props) != VK_SUCCESS)
       missing.push_back(fmt::format("3D storage images of format {}", static_cast<int>(format)));
   }
+  for (VkFormat format : wanted.blend_attachment_formats) {
+    VkFormatProperties props{};
+    vkGetPhysicalDeviceFormatProperties(device, format, &props);
+    if (!(props.optimalTilingFeatures & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT))
+      missing.push_back(fmt::format("blending into colour attachments of format {}", static_cast<int>(format)));
+  }
   if (wanted.graphics_queue) {
     std::uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
@@ -126,6 +132,9 @@ void DeviceRequirements::add(const DeviceRequirements& other) {
   for (VkFormat f : other.storage_image_3d_formats)
     if (std::find(storage_image_3d_formats.begin(), storage_image_3d_formats.end(), f) == storage_image_3d_formats.end())
       storage_image_3d_formats.push_back(f);
+  for (VkFormat f : other.blend_attachment_formats)
+    if (std::find(blend_attachment_formats.begin(), blend_attachment_formats.end(), f) == blend_attachment_formats.end())
+      blend_attachment_formats.push_back(f);
 }
 
 std::vector<DeviceInfo> list_devices() {

@@ -39,10 +39,11 @@ struct DeviceRequirements {
   bool subgroup_arithmetic = false;                   // subgroupAdd/Max... in compute shaders
   std::vector<VkFormat> storage_image_3d_formats;     // formats it stores into 3D storage images
   bool graphics_queue = false;                        // it draws (graphics pipeline on the same queue)
+  std::vector<VkFormat> blend_attachment_formats;     // formats it draws into with blending
   void add(const DeviceRequirements& other);          // the union of both
 };
 
-struct PipelineObjects;  // compute_pipeline.cpp: layout and pipeline shared by equal pipelines
+struct PipelineObjects;  // pipeline_objects.hpp: layouts and pipeline shared by equal pipelines
 
 class Context {
  public:

@@ -47,6 +47,26 @@ Handle<VkImage> create_image_3d(Context& ctx, VkFormat format, std::uint32_t wid
   return {image, [d = ctx.device()](VkImage i) { vkDestroyImage(d, i, nullptr); }};
 }
 
+VkImageCreateInfo color_target_info(VkFormat format, std::uint32_t width, std::uint32_t height) {
+  VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  info.imageType = VK_IMAGE_TYPE_2D;
+  info.format = format;
+  info.extent = {width, height, 1};
+  info.mipLevels = 1;
+  info.arrayLayers = 1;
+  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  return info;
+}
+
+Handle<VkImage> create_image(Context& ctx, const VkImageCreateInfo& info) {
+  VkImage image = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateImage(ctx.device(), &info, nullptr, &image));
+  return {image, [d = ctx.device()](VkImage i) { vkDestroyImage(d, i, nullptr); }};
+}
+
 }  // namespace
 
 Buffer::Buffer(Context& ctx, VkDeviceSize bytes, VkBufferUsageFlags usage, Where where) : bytes_(bytes) {
@@ -131,6 +151,45 @@ StorageImage3D::StorageImage3D(Context& ctx, VkFormat format, std::uint32_t widt
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0,
                          nullptr, 1, &barrier);
   });
+}
+
+ColorTarget::ColorTarget(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height)
+    : format_(format), width_(width), height_(height) {
+  image_ = create_image(ctx, color_target_info(format, width, height));
+  VkMemoryRequirements req{};
+  vkGetImageMemoryRequirements(ctx.device(), image_, &req);
+  allocated_bytes_ = req.size;
+  memory_ = allocate(ctx, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
+
+  VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  view_info.image = image_;
+  view_info.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  view_info.format = format;
+  view_info.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  VkImageView view = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateImageView(ctx.device(), &view_info, nullptr, &view));
+  view_ = Handle<VkImageView>(view, [d = ctx.device()](VkImageView v) { vkDestroyImageView(d, v, nullptr); });
+
+  // Into the layout it rests in between passes; the contents stay undefined until a copy fills them.
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    barrier.dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+    barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    barrier.newLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    barrier.srcQueueFamilyIndex = barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    barrier.image = image_;
+    barrier.subresourceRange = view_info.subresourceRange;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0,
+                         nullptr, 0, nullptr, 1, &barrier);
+  });
+}
+
+VkDeviceSize color_target_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height) {
+  Handle<VkImage> image = create_image(ctx, color_target_info(format, width, height));
+  VkMemoryRequirements req{};
+  vkGetImageMemoryRequirements(ctx.device(), image, &req);
+  return req.size;
 }
 
 VkDeviceSize image_3d_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,

@@ -48,6 +48,32 @@ class StorageImage3D {
   VkDeviceSize allocated_bytes_ = 0;
 };
 
+// A 2D image a graphics pipeline draws into off-screen (colour attachment), filled from and read
+// back into buffers by copies (graphics_pipeline.hpp). Between passes it rests in
+// VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL.
+class ColorTarget {
+ public:
+  ColorTarget(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height);
+
+  VkImage image() const { return image_; }
+  VkImageView view() const { return view_; }
+  VkFormat format() const { return format_; }
+  std::uint32_t width() const { return width_; }
+  std::uint32_t height() const { return height_; }
+  VkDeviceSize allocated_bytes() const { return allocated_bytes_; }
+
+ private:
+  Handle<VkDeviceMemory> memory_;  // declared first: destroyed after the image and view bound to it
+  Handle<VkImage> image_;
+  Handle<VkImageView> view_;
+  VkFormat format_;
+  std::uint32_t width_, height_;
+  VkDeviceSize allocated_bytes_ = 0;
+};
+
+// What the driver would allocate for such a target, without allocating.
+VkDeviceSize color_target_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height);
+
 // What the driver would allocate for such an image (vkGetImageMemoryRequirements), without allocating.
 VkDeviceSize image_3d_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
                                         std::uint32_t depth);

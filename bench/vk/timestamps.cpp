@@ -16,12 +16,25 @@ TimestampQueries::TimestampQueries(Context& ctx, std::uint32_t capacity) : ctx_(
 void TimestampQueries::reserve(std::uint32_t stamps) {
   if (pool_.get() != VK_NULL_HANDLE && stamps <= capacity_) return;
   capacity_ = std::max(stamps, 2u);
-  VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
-  info.queryType = VK_QUERY_TYPE_TIMESTAMP;
-  info.queryCount = capacity_;
-  VkQueryPool pool = VK_NULL_HANDLE;
-  VK_CHECK(vkCreateQueryPool(ctx_.device(), &info, nullptr, &pool));
-  pool_ = {pool, [d = ctx_.device()](VkQueryPool p) { vkDestroyQueryPool(d, p, nullptr); }};
+  for (Handle<VkQueryPool>* target : {&pool_, &flush_pool_}) {
+    VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    info.queryCount = capacity_;
+    VkQueryPool pool = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateQueryPool(ctx_.device(), &info, nullptr, &pool));
+    *target = {pool, [d = ctx_.device()](VkQueryPool p) { vkDestroyQueryPool(d, p, nullptr); }};
+  }
+}
+
+// lavapipe (llvmpipe, Mesa 22.3 lp_setup_end_query) takes a timestamp at once only while no
+// framebuffer is bound; once any draw has bound one (in any earlier submission too, as the state
+// outlives it), it bins the timestamp into its rasteriser scene, which runs at the next flush: each
+// pass would be stamped when the next one ends, shifting every pass's time onto the one before it.
+// A second timestamp right after each one makes lavapipe flush, so the first is taken in place.
+// Elsewhere it costs next to nothing; its pool is never read.
+void TimestampQueries::stamp(VkCommandBuffer cmd, std::uint32_t index) {
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, index);
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, flush_pool_, index);
 }
 
 void TimestampQueries::count_invocations(bool on) {
@@ -41,7 +54,8 @@ void TimestampQueries::begin_frame(VkCommandBuffer cmd) {
   commands_.clear();
   commands_at_pass_start_ = ctx_.commands_recorded;
   vkCmdResetQueryPool(cmd, pool_, 0, capacity_);
-  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, 0);
+  vkCmdResetQueryPool(cmd, flush_pool_, 0, capacity_);
+  stamp(cmd, 0);
   if (counting_) {
     vkCmdResetQueryPool(cmd, statistics_, 0, kMaxCountedPasses);
     vkCmdBeginQuery(cmd, statistics_, 0, 0);
@@ -54,7 +68,7 @@ void TimestampQueries::end_pass(VkCommandBuffer cmd, const std::string& pass) {
   commands_.push_back(ctx_.commands_recorded - commands_at_pass_start_);
   commands_at_pass_start_ = ctx_.commands_recorded;
   const auto index = static_cast<std::uint32_t>(passes_.size());
-  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, index);
+  stamp(cmd, index);
   if (counting_) {
     if (index >= kMaxCountedPasses) throw std::logic_error("more passes than statistics queries");
     vkCmdEndQuery(cmd, statistics_, index - 1);

@@ -41,9 +41,12 @@ class TimestampQueries {
   std::vector<PassTime> read() const;
 
  private:
+  void stamp(VkCommandBuffer cmd, std::uint32_t index);
+
   Context& ctx_;
   std::uint32_t capacity_ = 0;
   Handle<VkQueryPool> pool_, statistics_;
+  Handle<VkQueryPool> flush_pool_;  // written after each stamp, never read (see stamp())
   bool counting_ = false;
   std::vector<std::string> passes_;
   std::vector<std::uint64_t> commands_;  // per pass

@@ -28,7 +28,7 @@ inline void validate(const GatherPattern& p) {
 }
 
 // Disc membership is `float(dx^2 + dy^2) <= r^2` with integer offsets in pixels: exact integers in
-// float, one rounding in r*r, so CPU and GPU (shaders/disc.glsl mirrors this) agree bit for bit.
+// float, one rounding in r*r, so CPU and GPU (shaders/common/disc.glsl mirrors this) agree bit for bit.
 inline bool in_disc(float radius_sq, int dx_px, int dy_px) {
   return static_cast<float>(dx_px * dx_px + dy_px * dy_px) <= radius_sq;
 }

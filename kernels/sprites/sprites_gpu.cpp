@@ -1,0 +1,106 @@
+#include "sprites_gpu.hpp"
+
+#include <algorithm>
+#include <bit>
+
+#include "naive_gpu.hpp"
+#include "vk/graphics_pipeline.hpp"
+#include "vk/spirv.hpp"
+
+namespace bokeh {
+
+namespace {
+
+constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+
+// Mirrors the push constants of shaders/sprites/quad.vert.
+struct TargetSize {
+  std::int32_t width_px, height_px;
+};
+
+class SpritesGpu final : public gpu::GpuFilter {
+ public:
+  SpritesGpu(gpu::GpuFrame& frame, const FilterOptions& options, const SpriteSettings& settings)
+      : frame_(frame),
+        max_sprites_(settings.max_sprites),
+        counters_(frame.ctx, sizeof(SpriteCounters),
+                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT),
+        sprites_(vk::make_storage_buffer(frame.ctx, std::max(1, settings.max_sprites) * sizeof(Sprite),
+                                         "sprite buffer")),
+        target_(frame.ctx, kSpriteTargetFormat, frame.width(), frame.height()),
+        // Float options travel as their bits: specialisation data is raw 4-byte words.
+        detect_(frame.ctx, vk::spirv("sprites/detect"), {kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
+                {settings.max_sprites, std::bit_cast<std::int32_t>(settings.threshold),
+                 std::bit_cast<std::int32_t>(settings.min_radius_px)}),
+        gather_(make_naive_gpu(frame, options)),
+        quads_(frame.ctx, target_, vk::spirv("sprites/quad_vertex"), vk::spirv("sprites/quad_fragment"), {kBuffer},
+               sizeof(TargetSize), vk::GraphicsPipeline::Blend::additive) {
+    detect_.bind(0, frame.color);
+    detect_.bind(1, frame.packed);
+    detect_.bind(2, counters_);
+    detect_.bind(3, sprites_);
+    quads_.bind(0, sprites_);
+  }
+
+  void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
+    const std::uint32_t w = frame_.width(), h = frame_.height();
+    // Reset the counters once the previous frame's draw has read them.
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    vkCmdPipelineBarrier(cmd,
+                         VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT |
+                             VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 0, nullptr);
+    const SpriteCounters reset{{6, 0, 0, 0}, 0, 0, 0};
+    vkCmdUpdateBuffer(cmd, counters_.get(), 0, sizeof(reset), &reset);
+    barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
+                         nullptr, 0, nullptr);
+    detect_.dispatch(cmd, &frame_.params, w, h);
+    timer.end_pass(cmd, "detect");
+
+    gather_->record(cmd, timer);  // stamps "gather"
+
+    vk::copy_to_target(cmd, frame_.output, target_, w, h);
+    const TargetSize size{frame_.params.width_px, frame_.params.height_px};
+    quads_.draw_indirect(cmd, &size, w, h, counters_);
+    vk::copy_from_target(cmd, target_, frame_.output, w, h);
+    timer.end_pass(cmd, "sprites");
+  }
+
+  std::uint64_t intermediate_bytes() const override {
+    return counters_.allocated_bytes() + sprites_.allocated_bytes() + target_.allocated_bytes() +
+           gather_->intermediate_bytes();
+  }
+
+  nlohmann::json stats() override {
+    SpriteCounters c{};
+    vk::download(frame_.ctx, counters_, &c, sizeof(c));
+    SpriteStats s;
+    s.drawn = c.draw.instanceCount;
+    s.overflowed = c.overflowed;
+    s.detected = s.drawn + s.overflowed;
+    s.quad_pixels = static_cast<std::int64_t>((std::uint64_t{c.quad_pixels_high} << 32) | c.quad_pixels_low);
+    s.max_sprites = max_sprites_;
+    return to_json(s);
+  }
+
+ private:
+  gpu::GpuFrame& frame_;
+  int max_sprites_;
+  vk::Buffer counters_, sprites_;
+  vk::ColorTarget target_;
+  vk::ComputePipeline detect_;
+  std::unique_ptr<gpu::GpuFilter> gather_;
+  vk::GraphicsPipeline quads_;
+};
+
+}  // namespace
+
+std::unique_ptr<gpu::GpuFilter> make_sprites_gpu(gpu::GpuFrame& frame, const FilterOptions& options,
+                                                 const SpriteSettings& settings) {
+  return std::make_unique<SpritesGpu>(frame, options, settings);
+}
+
+}  // namespace bokeh
