@@ -1,0 +1,110 @@
+#include "hexagon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "signed_coc.hpp"
+
+namespace bokeh {
+
+namespace {
+
+enum class Direction { up, downleft, downright };
+
+// The float operations of hexagon.glsl, in its order.
+float clamp01(float v) { return std::clamp(v, 0.0f, 1.0f); }
+
+// One blur's sums: rgb = sum w s.rgb / extent(s.a); the CoC mean's numerator and denominator.
+struct BlurSums {
+  float rgb[3];
+  float coc_weighted, weight;  // sum w extent(s.a) s.a, sum w extent(s.a)
+
+  void add(const float* s, float w) {
+    const float extent = hexagon_extent(s[3]);
+    const float colour_weight = w / extent, coc_weight = w * extent;
+    for (int ch = 0; ch < 3; ++ch) rgb[ch] = rgb[ch] + s[ch] * colour_weight;
+    coc_weighted = coc_weighted + s[3] * coc_weight;
+    weight = weight + coc_weight;
+  }
+};
+
+// One-sided scatter-as-gather blur of `src` at (x, y) along d with taps 0..T; centre_coc is the
+// pixel's own signed CoC. An off-axis sample is the four texels around it, each tested with its own
+// CoC ("the CoCSize of that pixel") and weighted by its bilinear weight; samples off the image add 0.
+BlurSums blur(const Image& src, int x, int y, Direction d, int taps, float centre_coc) {
+  BlurSums b{{0.0f, 0.0f, 0.0f}, 0.0f, 0.0f};
+  const float* centre = src.px(x, y);
+  b.add(centre, hexagon_centre_weight(centre[3]));  // t = 0: the pixel itself
+  for (int t = 1; t <= taps; ++t) {
+    const float ft = static_cast<float>(t);
+    if (d == Direction::up) {
+      const float* s = src.px(x, std::min(y + t, src.height - 1));
+      b.add(s, y + t <= src.height - 1 ? hexagon_weight(s[3], centre_coc, ft) : 0.0f);
+    } else {
+      const float dx = ft * kHexagonSin60, dy = ft * -0.5f;
+      const BilinearTaps taps4 =
+          bilinear_taps(src, static_cast<float>(x) + (d == Direction::downleft ? dx : -dx), static_cast<float>(y) + dy);
+      float beta[4];
+      bilinear_weights(taps4, beta);
+      for (int k = 0; k < 4; ++k) {
+        const float* s = taps4.texel[k];
+        b.add(s, taps4.inside ? beta[k] * hexagon_weight(s[3], centre_coc, ft) : 0.0f);
+      }
+    }
+  }
+  return b;
+}
+
+}  // namespace
+
+float hexagon_centre_weight(float s) { return 1.0f - std::min(std::abs(s), 1.0f) * 0.5f; }
+
+float hexagon_extent(float s) {
+  const float a = std::abs(s);
+  return a + 1.0f - std::min(a, 1.0f) * 0.5f;
+}
+
+float hexagon_weight(float s, float c, float t) {
+  float w = clamp01(std::abs(s) - t + 1.0f);
+  if (s >= 0.0f) w = c < 0.0f ? 0.0f : w * clamp01(2.0f * c - s + 1.0f);
+  return w;
+}
+
+HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads) {
+  if (signed_coc.channels != 4) throw std::invalid_argument("hexagon: input must be RGBA (rgb, signed CoC)");
+  if (taps < 0) throw std::invalid_argument("hexagon: taps must be >= 0");
+  const int w = signed_coc.width, h = signed_coc.height;
+  HexagonPasses p{Image(w, h, 4), Image(w, h, 4), Image(w, h, 3)};
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float c = signed_coc.px(x, y)[3];
+      const BlurSums up = blur(signed_coc, x, y, Direction::up, taps, c);
+      const BlurSums downleft = blur(signed_coc, x, y, Direction::downleft, taps, c);
+      float* o1 = p.up.px(x, y);
+      float* o2 = p.up_downleft_mean.px(x, y);
+      for (int ch = 0; ch < 3; ++ch) {
+        o1[ch] = up.rgb[ch];
+        o2[ch] = (up.rgb[ch] + downleft.rgb[ch]) * 0.5f;
+      }
+      o1[3] = up.coc_weighted / up.weight;
+      o2[3] = (up.coc_weighted + downleft.coc_weighted) / (up.weight + downleft.weight);
+    }
+  });
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float c = signed_coc.px(x, y)[3];
+      const BlurSums r1 = blur(p.up, x, y, Direction::downleft, taps, c);
+      const BlurSums r2 = blur(p.up_downleft_mean, x, y, Direction::downright, taps, c);
+      float* o = p.result.px(x, y);
+      for (int ch = 0; ch < 3; ++ch) o[ch] = r1.rgb[ch] + (r2.rgb[ch] - r1.rgb[ch]) * kHexagonTwoThirds;
+    }
+  });
+  return p;
+}
+
+Image hexagon_blur(const Image& signed_coc, int taps, int threads) {
+  return std::move(hexagon_passes(signed_coc, taps, threads).result);
+}
+
+}  // namespace bokeh
