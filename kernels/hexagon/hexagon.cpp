@@ -42,15 +42,14 @@ BlurSums blur(const Image& src, int x, int y, Direction d, int taps, float centr
       const float* s = src.px(x, std::min(y + t, src.height - 1));
       b.add(s, y + t <= src.height - 1 ? hexagon_weight(s[3], centre_coc, ft) : 0.0f);
     } else {
-      const float dx = ft * kHexagonSin60, dy = ft * -0.5f;
-      const BilinearTaps taps4 =
-          bilinear_taps(src, static_cast<float>(x) + (d == Direction::downleft ? dx : -dx), static_cast<float>(y) + dy);
+      const float dx = ft * kHexagonSin60;
+      const SubpixelOffset o = split_offset(d == Direction::downleft ? dx : -dx, ft * -0.5f);
+      const float* texel[4];
+      bilinear_texels(src, x, y, o, texel);
       float beta[4];
-      bilinear_weights(taps4, beta);
-      for (int k = 0; k < 4; ++k) {
-        const float* s = taps4.texel[k];
-        b.add(s, taps4.inside ? beta[k] * hexagon_weight(s[3], centre_coc, ft) : 0.0f);
-      }
+      bilinear_weights(o, beta);
+      const bool inside = sample_inside(src, x, y, o);
+      for (int k = 0; k < 4; ++k) b.add(texel[k], inside ? beta[k] * hexagon_weight(texel[k][3], centre_coc, ft) : 0.0f);
     }
   }
   return b;

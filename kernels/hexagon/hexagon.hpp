@@ -8,10 +8,12 @@
 // x = +-r sqrt(3)/2. "B_d" spreads a pixel's light from it along d over its CoC; as a gather, pixel p
 // reads the samples p + t g, t = 0..T (T = the largest CoC, whole pixels, unit steps), g = -d:
 //   up (0, -1): g = (0, 1);  down-left (-sqrt3/2, 1/2): g = (sqrt3/2, -1/2);  down-right: g = (-sqrt3/2, -1/2)
-// (image y points down). Off-axis samples are bilinear, clamp-to-edge (the write-up samples textures).
+// (image y points down). An off-axis sample is the four texels around p + t g, each with its bilinear
+// weight (the write-up samples filtered textures) and each tested with its own CoC ("the CoCSize of
+// that pixel"); samples beyond the image's outermost pixel centres add nothing (signed_coc.hpp).
 //
-// Per-pixel CoC (scatter-as-gather), as the write-up has it: sample t of pixel p, with signed CoC s
-// (near negative) against the pixel's own c, is "added in" with the coverage
+// Per-pixel CoC (scatter-as-gather), as the write-up has it: a sample (texel) at t px from pixel p,
+// with signed CoC s (near negative) against the pixel's own c, is "added in" with the coverage
 //   w = clamp(|s| - t + 1, 0, 1)          "blend in the contribution as the CoC goes from t to t - 1 px"
 //   x 0                                   if s is behind the focus plane and c in front of it,
 //   x clamp(2c - s + 1, 0, 1)             if both are behind: "not too far behind" (CoC at most 2c);
@@ -36,10 +38,11 @@
 // For exactness at radius 0, out2 holds the mean (B_up + B_downleft) / 2 and the result is computed as
 // R1 + (R2 - R1) 2/3 with R1 = B_downleft(out1), R2 = B_downright(out2): the same (R1 + 2 R2) / 3.
 //
-// Energy: conserved at a constant CoC away from the borders (each blur spreads every pixel's light
-// over its own extent with weights summing to one). With varying CoC it is approximate: the near/far
-// rule drops light it deems hidden, bilinear samples mix CoCs, and the second pass spreads a pixel of
-// mixed contributions by their one mean CoC.
+// Energy: each blur spreads every texel's light over its own extent with weights summing to one, so
+// light is conserved away from the borders wherever the near/far rule lets every sample through (at a
+// constant CoC, or all in front of the focus plane, or all behind it within a factor 2: tested). The
+// rule drops light it deems hidden, and with mixed CoCs the second pass spreads a pixel of several
+// contributions by their one mean CoC, which places (not loses) light approximately.
 #include <vector>
 
 #include "image.hpp"

@@ -10,6 +10,8 @@ namespace bokeh {
 namespace {
 
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+// Adjacent pixels per invocation of both blur passes (OUTPUTS in shaders/hexagon/hexagon.glsl).
+constexpr std::uint32_t kOutputs = 4;
 
 class HexagonGpu final : public gpu::GpuFilter {
  public:
@@ -39,9 +41,9 @@ class HexagonGpu final : public gpu::GpuFilter {
     const std::uint32_t w = frame_.width(), h = frame_.height();
     prepare_.dispatch(cmd, &frame_.params, w, h);
     timer.end_pass(cmd, "prepare");
-    first_.dispatch(cmd, &frame_.params, w, h);
+    first_.dispatch(cmd, &frame_.params, (w + kOutputs - 1) / kOutputs, h);
     timer.end_pass(cmd, "up_and_downleft");
-    second_.dispatch(cmd, &frame_.params, w, h);
+    second_.dispatch(cmd, &frame_.params, (w + kOutputs - 1) / kOutputs, h);
     timer.end_pass(cmd, "rhombi");
   }
   std::uint64_t intermediate_bytes() const override {

@@ -37,11 +37,15 @@
 
 namespace bokeh {
 
-// One spiral sample, as shaders/spiral/spiral.comp reads it (a vec4).
+// One spiral sample, as shaders/spiral/spiral.comp reads it (two vec4): its offset from the pixel
+// split into whole pixels (exact small integers in float) and a fraction (split_offset), so every
+// pixel uses the same bilinear weights.
 struct SpiralSample {
-  float dx_px, dy_px;      // offset from the pixel
+  float x_px, y_px;        // whole-pixel part of the offset
+  float fx, fy;            // fractional part, in [0, 1)
   float edge_start_px;     // spiral radius - 1/2: where the sample's smoothstep starts (exact in float)
   float inverse_count;     // 1 / (i + 2): the running average's weight of sample i
+  float unused[2];
 };
 
 // The spiral for spacing s (px, > 0) up to radius R (px): empty if s >= R.

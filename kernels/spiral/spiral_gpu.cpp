@@ -13,6 +13,8 @@ namespace bokeh {
 namespace {
 
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+// Adjacent pixels per invocation of the spiral pass (OUTPUTS in shaders/spiral/spiral.comp).
+constexpr std::uint32_t kOutputs = 4;
 
 class SpiralGpu final : public gpu::GpuFilter {
  public:
@@ -37,17 +39,18 @@ class SpiralGpu final : public gpu::GpuFilter {
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
     prepare_.dispatch(cmd, &frame_.params, frame_.width(), frame_.height());
     timer.end_pass(cmd, "prepare");
-    spiral_.dispatch(cmd, &frame_.params, frame_.width(), frame_.height());
+    spiral_.dispatch(cmd, &frame_.params, (frame_.width() + kOutputs - 1) / kOutputs, frame_.height());
     timer.end_pass(cmd, "spiral");
   }
   std::uint64_t intermediate_bytes() const override { return table_.allocated_bytes() + signed_coc_.allocated_bytes(); }
 
  private:
   static vk::Buffer upload_table(vk::Context& ctx, const std::vector<SpiralSample>& spiral) {
-    static_assert(sizeof(SpiralSample) == 16, "one vec4 per sample");
+    static_assert(sizeof(SpiralSample) == 32, "two vec4 per sample");
+    const VkDeviceSize bytes = spiral.size() * sizeof(SpiralSample);
     // An empty spiral (spacing >= the largest radius) still needs a valid buffer.
-    vk::Buffer b = vk::make_storage_buffer(ctx, std::max<VkDeviceSize>(16, spiral.size() * 16), "spiral table");
-    if (!spiral.empty()) vk::upload(ctx, b, spiral.data(), spiral.size() * 16);
+    vk::Buffer b = vk::make_storage_buffer(ctx, std::max<VkDeviceSize>(32, bytes), "spiral table");
+    if (!spiral.empty()) vk::upload(ctx, b, spiral.data(), bytes);
     return b;
   }
   gpu::GpuFrame& frame_;

@@ -1,27 +1,49 @@
-// One-sided scatter-as-gather 1D blur of the hexagon (blur() in kernels/hexagon/hexagon.cpp), reading
-// the RGBA buffer BLUR_SOURCE: defines BlurSums BLUR_NAME(ivec2 p, int direction, float centre_coc).
-// Included once per source buffer (GLSL cannot pass a buffer to a function). Needs TAPS, common.glsl,
-// bilinear.glsl and hexagon.glsl. Samples off the image add 0 (loads stay clamped, no branch).
-BlurSums BLUR_NAME(ivec2 p, const int direction, float centre_coc) {
-  BlurSums sums = blur_start();
-  const vec4 centre = BLUR_SOURCE[index_of(p)];
-  blur_add(sums, centre, hexagon_centre_weight(centre.a));  // t = 0: the pixel itself
+// One-sided scatter-as-gather 1D blur of the hexagon (blur() in kernels/hexagon/hexagon.cpp) for the
+// OUTPUTS adjacent pixels (x0 + j, y), reading the RGBA buffer BLUR_SOURCE: defines
+//   void BLUR_NAME(int x0, int y, int direction, float centre_coc[OUTPUTS], out BlurSums sums[OUTPUTS]).
+// Included once per source buffer (GLSL cannot pass a buffer to a function). Needs TAPS, OUTPUTS,
+// common.glsl, bilinear.glsl and hexagon.glsl. An off-axis tap has the same offset for every pixel, so
+// the pixels share its texels: 2 (OUTPUTS + 1) loads instead of 4 OUTPUTS. Taps off the image add 0
+// (their loads stay clamped: no branch).
+void BLUR_NAME(int x0, int y, const int direction, float centre_coc[OUTPUTS], out BlurSums sums[OUTPUTS]) {
+  const uint row = uint(y * params.width_px);
+  for (int j = 0; j < OUTPUTS; ++j) {
+    const vec4 centre = BLUR_SOURCE[row + uint(clamp_x(x0 + j))];
+    sums[j] = blur_start();
+    blur_add(sums[j], centre, hexagon_centre_weight(centre.a));  // t = 0: the pixel itself
+  }
   for (int t = 1; t <= TAPS; ++t) {
     const float ft = float(t);
     if (direction == HEX_UP) {
-      const vec4 s = BLUR_SOURCE[clamped_index(p + ivec2(0, t))];
-      blur_add(sums, s, p.y + t <= params.height_px - 1 ? hexagon_weight(s.a, centre_coc, ft) : 0.0);
+      const bool inside = y + t <= params.height_px - 1;
+      const uint tap_row = uint(clamp_y(y + t) * params.width_px);
+      for (int j = 0; j < OUTPUTS; ++j) {
+        const vec4 s = BLUR_SOURCE[tap_row + uint(clamp_x(x0 + j))];
+        blur_add(sums[j], s, inside ? hexagon_weight(s.a, centre_coc[j], ft) : 0.0);
+      }
     } else {
-      precise const float dx = ft * HEX_SIN60, dy = ft * -0.5;
-      precise const vec2 pos = vec2(p) + vec2(direction == HEX_DOWNLEFT ? dx : -dx, dy);
-      const Bilinear b = bilinear_at(pos);
-      const vec4 beta = b.inside ? bilinear_weights(b) : vec4(0.0);
-      const vec4 s00 = BLUR_SOURCE[b.i00], s10 = BLUR_SOURCE[b.i10], s01 = BLUR_SOURCE[b.i01], s11 = BLUR_SOURCE[b.i11];
-      blur_add(sums, s00, beta.x * hexagon_weight(s00.a, centre_coc, ft));
-      blur_add(sums, s10, beta.y * hexagon_weight(s10.a, centre_coc, ft));
-      blur_add(sums, s01, beta.z * hexagon_weight(s01.a, centre_coc, ft));
-      blur_add(sums, s11, beta.w * hexagon_weight(s11.a, centre_coc, ft));
+      precise const float dx = ft * HEX_SIN60;
+      precise const vec2 d = vec2(direction == HEX_DOWNLEFT ? dx : -dx, ft * -0.5);
+      precise const vec2 whole_f = floor(d);
+      precise const vec2 f = d - whole_f;  // split_offset()
+      const ivec2 whole = ivec2(whole_f);
+      const int sy = y + whole.y;
+      const uint row0 = uint(clamp_y(sy) * params.width_px), row1 = uint(clamp_y(sy + 1) * params.width_px);
+      vec4 top[OUTPUTS + 1], bottom[OUTPUTS + 1];
+      for (int k = 0; k <= OUTPUTS; ++k) {
+        const uint sx = uint(clamp_x(x0 + whole.x + k));
+        top[k] = BLUR_SOURCE[row0 + sx];
+        bottom[k] = BLUR_SOURCE[row1 + sx];
+      }
+      const vec4 beta = bilinear_weights(f);
+      for (int j = 0; j < OUTPUTS; ++j) {
+        const vec4 b = sample_inside(ivec2(x0 + j + whole.x, sy), f) ? beta : vec4(0.0);
+        const float c = centre_coc[j];
+        blur_add(sums[j], top[j], b.x * hexagon_weight(top[j].a, c, ft));
+        blur_add(sums[j], top[j + 1], b.y * hexagon_weight(top[j + 1].a, c, ft));
+        blur_add(sums[j], bottom[j], b.z * hexagon_weight(bottom[j].a, c, ft));
+        blur_add(sums[j], bottom[j + 1], b.w * hexagon_weight(bottom[j + 1].a, c, ft));
+      }
     }
   }
-  return sums;
 }

@@ -1,6 +1,7 @@
 #version 450
 // Hexagon, pass 1 (two outputs): out1 = blur up; out2 = (blur up + blur down-left) / 2, RGBA with
-// the blurs' weighted mean signed CoC in alpha (kernels/hexagon/hexagon.hpp).
+// the blurs' weighted mean signed CoC in alpha (kernels/hexagon/hexagon.hpp). OUTPUTS adjacent
+// pixels of a row per invocation (blur.glsl).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "bilinear.glsl"
@@ -17,17 +18,23 @@ layout(std430, binding = 2) writeonly buffer Mean { vec4 up_downleft_mean[]; };
 #include "blur.glsl"
 
 void main() {
-  const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  // Past the edge: compute for the edge pixel, store nothing (keeps the tap loops in uniform control flow).
-  const ivec2 q = min(p, ivec2(params.width_px - 1, params.height_px - 1));
-  const float c = signed_coc[index_of(q)].a;
-  const BlurSums up = blur_signed_coc(q, HEX_UP, c);
-  const BlurSums downleft = blur_signed_coc(q, HEX_DOWNLEFT, c);
-  if (outside(p)) return;
-  const uint i = index_of(p);
-  precise const float up_coc = up.coc_weighted / up.weight;
-  up_blur[i] = vec4(up.rgb, up_coc);
-  precise const vec3 mean = (up.rgb + downleft.rgb) * 0.5;
-  precise const float mean_coc = (up.coc_weighted + downleft.coc_weighted) / (up.weight + downleft.weight);
-  up_downleft_mean[i] = vec4(mean, mean_coc);
+  const int x0 = int(gl_GlobalInvocationID.x) * OUTPUTS;
+  // Past the edge: compute on clamped input, store nothing (the tap loops stay in uniform control flow).
+  const int y = clamp_y(int(gl_GlobalInvocationID.y));
+  float c[OUTPUTS];
+  for (int j = 0; j < OUTPUTS; ++j) c[j] = signed_coc[index_of(ivec2(clamp_x(x0 + j), y))].a;
+  BlurSums up[OUTPUTS], downleft[OUTPUTS];
+  blur_signed_coc(x0, y, HEX_UP, c, up);
+  blur_signed_coc(x0, y, HEX_DOWNLEFT, c, downleft);
+  if (int(gl_GlobalInvocationID.y) >= params.height_px) return;
+  for (int j = 0; j < OUTPUTS; ++j) {
+    if (x0 + j >= params.width_px) break;
+    const uint i = index_of(ivec2(x0 + j, y));
+    precise const float up_coc = up[j].coc_weighted / up[j].weight;
+    up_blur[i] = vec4(up[j].rgb, up_coc);
+    precise const vec3 mean = (up[j].rgb + downleft[j].rgb) * 0.5;
+    precise const float mean_coc =
+        (up[j].coc_weighted + downleft[j].coc_weighted) / (up[j].weight + downleft[j].weight);
+    up_downleft_mean[i] = vec4(mean, mean_coc);
+  }
 }

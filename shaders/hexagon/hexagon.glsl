@@ -3,6 +3,7 @@
 const float HEX_SIN60 = 0.866025388240814208984375;   // sqrt(3) / 2 as a float
 const float HEX_TWO_THIRDS = 0.666666686534881591796875;
 const int HEX_UP = 0, HEX_DOWNLEFT = 1, HEX_DOWNRIGHT = 2;
+const int OUTPUTS = 4;  // adjacent pixels per invocation; kernels/hexagon/hexagon_gpu.cpp dispatches for it
 
 // Sample of signed CoC s at t px from a pixel of signed CoC c: the soft edge (full at |s| >= t, none
 // at |s| <= t - 1); a sample behind the focus plane only into a pixel behind it too, and fading out

@@ -1,6 +1,7 @@
 #version 450
 // Hexagon, pass 2 (three rhombi): R1 = blur of out1 down-left, R2 = blur of out2 down-right; the
 // hexagon (R1 + 2 R2) / 3 computed as R1 + (R2 - R1) 2/3 (exact where both equal the input).
+// OUTPUTS adjacent pixels of a row per invocation (blur.glsl).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "bilinear.glsl"
@@ -23,12 +24,17 @@ layout(std430, binding = 3) writeonly buffer Out { vec4 result[]; };
 #include "blur.glsl"
 
 void main() {
-  const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-  const ivec2 q = min(p, ivec2(params.width_px - 1, params.height_px - 1));
-  const float c = signed_coc[index_of(q)].a;
-  const BlurSums r1 = blur_up(q, HEX_DOWNLEFT, c);
-  const BlurSums r2 = blur_mean(q, HEX_DOWNRIGHT, c);
-  if (outside(p)) return;
-  precise const vec3 hexagon = r1.rgb + (r2.rgb - r1.rgb) * HEX_TWO_THIRDS;
-  result[index_of(p)] = vec4(hexagon, 1.0);
+  const int x0 = int(gl_GlobalInvocationID.x) * OUTPUTS;
+  const int y = clamp_y(int(gl_GlobalInvocationID.y));
+  float c[OUTPUTS];
+  for (int j = 0; j < OUTPUTS; ++j) c[j] = signed_coc[index_of(ivec2(clamp_x(x0 + j), y))].a;
+  BlurSums r1[OUTPUTS], r2[OUTPUTS];
+  blur_up(x0, y, HEX_DOWNLEFT, c, r1);
+  blur_mean(x0, y, HEX_DOWNRIGHT, c, r2);
+  if (int(gl_GlobalInvocationID.y) >= params.height_px) return;
+  for (int j = 0; j < OUTPUTS; ++j) {
+    if (x0 + j >= params.width_px) break;
+    precise const vec3 hexagon = r1[j].rgb + (r2[j].rgb - r1[j].rgb) * HEX_TWO_THIRDS;
+    result[index_of(ivec2(x0 + j, y))] = vec4(hexagon, 1.0);
+  }
 }

@@ -59,8 +59,10 @@ TEST(SpiralSamples, FollowGodotsLoop) {
   double radius = s;
   for (std::size_t i = 0; i < spiral.size(); ++i) {
     const double angle = i * std::numbers::pi * (3.0 - std::sqrt(5.0));
-    EXPECT_NEAR(spiral[i].dx_px, std::cos(angle) * radius, 1e-4);
-    EXPECT_NEAR(spiral[i].dy_px, std::sin(angle) * radius, 1e-4);
+    EXPECT_NEAR(spiral[i].x_px + spiral[i].fx, std::cos(angle) * radius, 1e-4);
+    EXPECT_NEAR(spiral[i].y_px + spiral[i].fy, std::sin(angle) * radius, 1e-4);
+    EXPECT_EQ(spiral[i].x_px, std::floor(spiral[i].x_px));
+    EXPECT_TRUE(spiral[i].fx >= 0.0f && spiral[i].fx < 1.0f && spiral[i].fy >= 0.0f && spiral[i].fy < 1.0f);
     EXPECT_FLOAT_EQ(spiral[i].edge_start_px, static_cast<float>(radius - 0.5));
     EXPECT_FLOAT_EQ(spiral[i].inverse_count, static_cast<float>(1.0 / (i + 2)));
     radius += s / radius;
