@@ -35,14 +35,22 @@
 //   - the "too far behind" cut gets the soft edge's one-pixel ramp: every weight is then continuous
 //     in the CoCs, so CPU and GPU agree and nothing pops as a CoC changes by less than a pixel (the
 //     reason the write-up softens the edge).
+//   - what the rule hides is filled: a blur whose included samples fill a view v = sum w / extent < 1
+//     while the rule hid a share h = sum (coverage - w) / extent is scaled by min(v + h, 1) / v, i.e.
+//     the hidden share takes the mean colour of what is visible, up to a full view (as the harness's
+//     depth-ordered reference fills a hidden surface's share). Without it a blurred foreground keeps a
+//     dark rim inside its edges, where the background it hides would have added light; a sharp pixel
+//     (v = 1) and any pixel the rule hides nothing from (h = 0) are unchanged.
 // For exactness at radius 0, out2 holds the mean (B_up + B_downleft) / 2 and the result is computed as
 // R1 + (R2 - R1) 2/3 with R1 = B_downleft(out1), R2 = B_downright(out2): the same (R1 + 2 R2) / 3.
 //
 // Energy: each blur spreads every texel's light over its own extent with weights summing to one, so
 // light is conserved away from the borders wherever the near/far rule lets every sample through (at a
 // constant CoC, or all in front of the focus plane, or all behind it within a factor 2: tested). The
-// rule drops light it deems hidden, and with mixed CoCs the second pass spreads a pixel of several
-// contributions by their one mean CoC, which places (not loses) light approximately.
+// rule drops light it deems hidden (the fill above puts some back, as the visible mean), and with
+// mixed CoCs the second pass spreads a pixel of several contributions by their one mean CoC, which
+// places (not loses) light approximately: a near object over a blurred background shows rim lines
+// and, in its holes, triangular traces of the one-sided blurs (the write-up: "this isn't perfect").
 #include <vector>
 
 #include "image.hpp"
@@ -54,8 +62,10 @@ namespace bokeh {
 inline constexpr float kHexagonSin60 = 0.866025388240814208984375f;
 inline constexpr float kHexagonTwoThirds = 0.666666686534881591796875f;
 
-// The weight of a sample of signed CoC s at t px from a pixel of signed CoC c (t >= 1).
-float hexagon_weight(float sample_coc, float centre_coc, float distance_px);
+// The soft edge: how much of a sample (texel) of signed CoC s reaches t px (t >= 1).
+float hexagon_coverage(float sample_coc, float distance_px);
+// The near/far rule: how much of a sample of signed CoC s the pixel of signed CoC c lets in.
+float hexagon_rule(float sample_coc, float centre_coc);
 // The weight of the pixel itself (t = 0): 1 at CoC 0, 1/2 from a CoC of one pixel on.
 float hexagon_centre_weight(float coc);
 // What a pixel's weights along one direction sum to, its centre's included: |CoC| + centre weight.

@@ -54,7 +54,8 @@ void declare_hexagon(std::vector<Method>& methods) {
   // f32 storage; radius 0: every weight but the pixel's own is 0 and the mean form is exact.
   m.storage_tolerance = [](const FilterOptions&) { return 0.0; };
   m.energy_note = "each texel's light is spread over its own CoC's extent with weights summing to one, in each "
-                  "pass; the near/far rule drops what it deems hidden (a background behind a sharper foreground)";
+                  "pass; the near/far rule drops what it deems hidden (a background behind a sharper foreground) "
+                  "and fills a blurred pixel's hidden share with the mean of what it sees";
   methods.push_back(std::move(m));
 }
 

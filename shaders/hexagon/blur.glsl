@@ -10,7 +10,7 @@ void BLUR_NAME(int x0, int y, const int direction, float centre_coc[OUTPUTS], ou
   for (int j = 0; j < OUTPUTS; ++j) {
     const vec4 centre = BLUR_SOURCE[row + uint(clamp_x(x0 + j))];
     sums[j] = blur_start();
-    blur_add(sums[j], centre, hexagon_centre_weight(centre.a));  // t = 0: the pixel itself
+    blur_add(sums[j], centre, hexagon_centre_weight(centre.a), 1.0);  // t = 0: the pixel itself
   }
   for (int t = 1; t <= TAPS; ++t) {
     const float ft = float(t);
@@ -19,7 +19,7 @@ void BLUR_NAME(int x0, int y, const int direction, float centre_coc[OUTPUTS], ou
       const uint tap_row = uint(clamp_y(y + t) * params.width_px);
       for (int j = 0; j < OUTPUTS; ++j) {
         const vec4 s = BLUR_SOURCE[tap_row + uint(clamp_x(x0 + j))];
-        blur_add(sums[j], s, inside ? hexagon_weight(s.a, centre_coc[j], ft) : 0.0);
+        blur_add(sums[j], s, inside ? hexagon_coverage(s.a, ft) : 0.0, hexagon_rule(s.a, centre_coc[j]));
       }
     } else {
       precise const float dx = ft * HEX_SIN60;
@@ -39,10 +39,10 @@ void BLUR_NAME(int x0, int y, const int direction, float centre_coc[OUTPUTS], ou
       for (int j = 0; j < OUTPUTS; ++j) {
         const vec4 b = sample_inside(ivec2(x0 + j + whole.x, sy), f) ? beta : vec4(0.0);
         const float c = centre_coc[j];
-        blur_add(sums[j], top[j], b.x * hexagon_weight(top[j].a, c, ft));
-        blur_add(sums[j], top[j + 1], b.y * hexagon_weight(top[j + 1].a, c, ft));
-        blur_add(sums[j], bottom[j], b.z * hexagon_weight(bottom[j].a, c, ft));
-        blur_add(sums[j], bottom[j + 1], b.w * hexagon_weight(bottom[j + 1].a, c, ft));
+        blur_add(sums[j], top[j], b.x * hexagon_coverage(top[j].a, ft), hexagon_rule(top[j].a, c));
+        blur_add(sums[j], top[j + 1], b.y * hexagon_coverage(top[j + 1].a, ft), hexagon_rule(top[j + 1].a, c));
+        blur_add(sums[j], bottom[j], b.z * hexagon_coverage(bottom[j].a, ft), hexagon_rule(bottom[j].a, c));
+        blur_add(sums[j], bottom[j + 1], b.w * hexagon_coverage(bottom[j + 1].a, ft), hexagon_rule(bottom[j + 1].a, c));
       }
     }
   }

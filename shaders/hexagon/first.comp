@@ -31,8 +31,9 @@ void main() {
     if (x0 + j >= params.width_px) break;
     const uint i = index_of(ivec2(x0 + j, y));
     precise const float up_coc = up[j].coc_weighted / up[j].weight;
-    up_blur[i] = vec4(up[j].rgb, up_coc);
-    precise const vec3 mean = (up[j].rgb + downleft[j].rgb) * 0.5;
+    const vec3 up_rgb = blur_result(up[j]);
+    up_blur[i] = vec4(up_rgb, up_coc);
+    precise const vec3 mean = (up_rgb + blur_result(downleft[j])) * 0.5;
     precise const float mean_coc =
         (up[j].coc_weighted + downleft[j].coc_weighted) / (up[j].weight + downleft[j].weight);
     up_downleft_mean[i] = vec4(mean, mean_coc);

@@ -34,7 +34,8 @@ void main() {
   if (int(gl_GlobalInvocationID.y) >= params.height_px) return;
   for (int j = 0; j < OUTPUTS; ++j) {
     if (x0 + j >= params.width_px) break;
-    precise const vec3 hexagon = r1[j].rgb + (r2[j].rgb - r1[j].rgb) * HEX_TWO_THIRDS;
+    const vec3 a = blur_result(r1[j]), b = blur_result(r2[j]);
+    precise const vec3 hexagon = a + (b - a) * HEX_TWO_THIRDS;
     result[index_of(ivec2(x0 + j, y))] = vec4(hexagon, 1.0);
   }
 }

@@ -1,8 +1,8 @@
 // hexagon (kernels/hexagon/): a point light of constant CoC against the closed form of a regular
 // hexagon of that circumradius (vertices up and down); radius 0; energy: conserved wherever the
 // near/far rule lets every sample through (each source's weights sum to one), lost where it hides a
-// background behind a foreground; GPU against CPU on the point light (the conformance suite checks
-// the scenes).
+// background behind a foreground, whose blurred pixels take the mean of what they see for the hidden
+// share; GPU against CPU on the point light (the conformance suite checks the scenes).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +13,7 @@
 #include "hexagon.hpp"
 #include "method.hpp"
 #include "run.hpp"
+#include "signed_coc.hpp"
 #include "test_support.hpp"
 
 namespace bokeh {
@@ -158,6 +159,32 @@ TEST(Hexagon, NearFarRuleHidesBackgroundLight) {
   for (int y = 24; y <= 40; ++y)
     for (int x = 30; x <= 50; ++x)
       for (int c = 0; c < 3; ++c) ASSERT_EQ(out.px(x, y)[c], f.color.px(x, y)[c]) << x << "," << y;
+}
+
+// The fill: a blurred foreground over a blurred background. The background's samples are hidden from
+// the foreground's pixels, so along its edge a foreground pixel sees only part of a view; that part is
+// all foreground, and the hidden share takes its mean: the first pass's up-blur of the square's
+// bottom row (whose samples below are all background) is exactly the square's colour, where a sum
+// without the fill would keep 1/2 / (|CoC| + 1/2) of it. The final edge is then no darker than the
+// inside (no dark rim).
+TEST(Hexagon, HiddenShareOfABlurredForegroundTakesItsVisibleMean) {
+  const int w = 64, h = 64;
+  const float r = 6.0f, a = 2.0f, b = 0.5f;
+  Frame f = black_frame(w, h, 10.0f, r);
+  for (float& v : f.color.pixels) v = b;
+  for (int y = 20; y < 44; ++y)
+    for (int x = 20; x < 44; ++x) {
+      *f.depth_m.px(x, y) = 1.0f;
+      for (int c = 0; c < 3; ++c) f.color.px(x, y)[c] = a;
+    }
+  const Image input = signed_coc_image(f.color, f.radius_px, f.depth_m, kFocusM);
+  const HexagonPasses p = hexagon_passes(input, 8, 2);
+  for (int x = 22; x < 42; ++x) EXPECT_NEAR(p.up.px(x, 43)[0], a, 1e-6 * a) << x;
+  double edge = 0, inside = 0;
+  for (int x = 28; x < 36; ++x) edge += p.result.px(x, 43)[0] / 8, inside += p.result.px(x, 32)[0] / 8;
+  std::printf("[hexagon] blurred foreground square: bottom row %.4f, centre row %.4f (colour %.1f)\n", edge, inside, a);
+  EXPECT_NEAR(inside, a, 1e-5);
+  EXPECT_GT(edge, 0.95 * a);
 }
 
 TEST(Hexagon, GpuPointLightMatchesTheCpuReference) {
