@@ -1,0 +1,125 @@
+#include "hexagon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "signed_coc.hpp"
+
+namespace bokeh {
+
+namespace {
+
+enum class Direction { up, downleft, downright };
+
+// The float operations of hexagon.glsl, in its order.
+float clamp01(float v) { return std::clamp(v, 0.0f, 1.0f); }
+
+// One blur's sums: rgb = sum w s.rgb / extent(s.a) with w = coverage x rule; the CoC mean's
+// numerator and denominator; the view the included samples fill, sum w / extent, and the share the
+// rule hid, sum (coverage - w) / extent.
+struct BlurSums {
+  float rgb[3];
+  float coc_weighted, weight;  // sum w extent(s.a) s.a, sum w extent(s.a)
+  float view, hidden;
+
+  void add(const float* s, float coverage, float rule) {
+    const float extent = hexagon_extent(s[3]);
+    const float w = coverage * rule;
+    const float colour_weight = w / extent, coc_weight = w * extent;
+    for (int ch = 0; ch < 3; ++ch) rgb[ch] = rgb[ch] + s[ch] * colour_weight;
+    coc_weighted = coc_weighted + s[3] * coc_weight;
+    weight = weight + coc_weight;
+    view = view + colour_weight;
+    hidden = hidden + (coverage - w) / extent;
+  }
+  // The blurred colour, its hidden share filled with the mean of what is visible (up to a full view).
+  float fill() const { return view < 1.0f ? std::min(view + hidden, 1.0f) / view : 1.0f; }
+};
+
+// One-sided scatter-as-gather blur of `src` at (x, y) along d with taps 0..T; centre_coc is the
+// pixel's own signed CoC. An off-axis sample is the four texels around it, each tested with its own
+// CoC ("the CoCSize of that pixel") and weighted by its bilinear weight; samples off the image add 0.
+BlurSums blur(const Image& src, int x, int y, Direction d, int taps, float centre_coc) {
+  BlurSums b{{0.0f, 0.0f, 0.0f}, 0.0f, 0.0f, 0.0f, 0.0f};
+  const float* centre = src.px(x, y);
+  b.add(centre, hexagon_centre_weight(centre[3]), 1.0f);  // t = 0: the pixel itself
+  for (int t = 1; t <= taps; ++t) {
+    const float ft = static_cast<float>(t);
+    if (d == Direction::up) {
+      const float* s = src.px(x, std::min(y + t, src.height - 1));
+      b.add(s, y + t <= src.height - 1 ? hexagon_coverage(s[3], ft) : 0.0f, hexagon_rule(s[3], centre_coc));
+    } else {
+      const float dx = ft * kHexagonSin60;
+      const SubpixelOffset o = split_offset(d == Direction::downleft ? dx : -dx, ft * -0.5f);
+      const float* texel[4];
+      bilinear_texels(src, x, y, o, texel);
+      float beta[4];
+      bilinear_weights(o, beta);
+      const bool inside = sample_inside(src, x, y, o);
+      for (int k = 0; k < 4; ++k)
+        b.add(texel[k], inside ? beta[k] * hexagon_coverage(texel[k][3], ft) : 0.0f,
+              hexagon_rule(texel[k][3], centre_coc));
+    }
+  }
+  return b;
+}
+
+}  // namespace
+
+float hexagon_centre_weight(float s) { return 1.0f - std::min(std::abs(s), 1.0f) * 0.5f; }
+
+float hexagon_extent(float s) {
+  const float a = std::abs(s);
+  return a + 1.0f - std::min(a, 1.0f) * 0.5f;
+}
+
+float hexagon_coverage(float s, float t) { return clamp01(std::abs(s) - t + 1.0f); }
+
+float hexagon_rule(float s, float c) {
+  if (s < 0.0f) return 1.0f;
+  return c < 0.0f ? 0.0f : clamp01(2.0f * c - s + 1.0f);
+}
+
+HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads) {
+  if (signed_coc.channels != 4) throw std::invalid_argument("hexagon: input must be RGBA (rgb, signed CoC)");
+  if (taps < 0) throw std::invalid_argument("hexagon: taps must be >= 0");
+  const int w = signed_coc.width, h = signed_coc.height;
+  HexagonPasses p{Image(w, h, 4), Image(w, h, 4), Image(w, h, 3)};
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float c = signed_coc.px(x, y)[3];
+      const BlurSums up = blur(signed_coc, x, y, Direction::up, taps, c);
+      const BlurSums downleft = blur(signed_coc, x, y, Direction::downleft, taps, c);
+      float* o1 = p.up.px(x, y);
+      float* o2 = p.up_downleft_mean.px(x, y);
+      const float up_fill = up.fill(), downleft_fill = downleft.fill();
+      for (int ch = 0; ch < 3; ++ch) {
+        o1[ch] = up.rgb[ch] * up_fill;
+        o2[ch] = (o1[ch] + downleft.rgb[ch] * downleft_fill) * 0.5f;
+      }
+      o1[3] = up.coc_weighted / up.weight;
+      o2[3] = (up.coc_weighted + downleft.coc_weighted) / (up.weight + downleft.weight);
+    }
+  });
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float c = signed_coc.px(x, y)[3];
+      const BlurSums r1 = blur(p.up, x, y, Direction::downleft, taps, c);
+      const BlurSums r2 = blur(p.up_downleft_mean, x, y, Direction::downright, taps, c);
+      float* o = p.result.px(x, y);
+      const float fill1 = r1.fill(), fill2 = r2.fill();
+      for (int ch = 0; ch < 3; ++ch) {
+        const float a = r1.rgb[ch] * fill1, b = r2.rgb[ch] * fill2;
+        o[ch] = a + (b - a) * kHexagonTwoThirds;
+      }
+    }
+  });
+  return p;
+}
+
+Image hexagon_blur(const Image& signed_coc, int taps, int threads) {
+  return std::move(hexagon_passes(signed_coc, taps, threads).result);
+}
+
+}  // namespace bokeh
