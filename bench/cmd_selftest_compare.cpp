@@ -224,6 +224,7 @@ void selftest(const SelftestOptions& o) {
                          "run (K^2); cross_machine: A against half-thread runs and back (2 K^2). Pairs share runs, so "
                          "they are not independent trials"},
                         {"sweeps_s", sweeps_s},
+                        {"reused_runs", o.reuse},  // true: runs from an earlier session, sweeps_s does not time them
                         {"runs", runs},
                         {"results", by_times}};
   write_results(o.out, "bokehbench.selftest_compare", first["context"], doc);
