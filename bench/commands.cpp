@@ -59,6 +59,10 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
   cmd->add_option("--plots-dir", plots_dir, "Where the plots go")->capture_default_str();
   cmd->add_option("--reference-cache", reference_cache, "Directory caching the exact references")->capture_default_str();
   cmd->add_flag("!--no-plot", plot, "Skip the plot");
+  cmd->add_option("--inject-slowdown-pct", inject_slowdown_pct,
+                  "Test of `compare` only: every sample runs this many percent more frames than it reports, a known "
+                  "slowdown of every point (recorded in the results' config)")
+      ->check(CLI::Range(0, 100));
 }
 
 SweepSettings SweepFlags::settings(const std::string& name, const std::string& plot_script) const {
@@ -74,6 +78,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.plot = plot;
   s.policy.budget_s = budget_s;
   s.policy.seed = seed;
+  s.policy.extra_work_fraction = inject_slowdown_pct / 100.0;
   return s;
 }
 

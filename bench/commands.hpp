@@ -32,6 +32,7 @@ struct SweepFlags {
   int cpu_threads = 0;
   double max_buffer_mb = 0;
   unsigned seed = 1;
+  int inject_slowdown_pct = 0;  // a test of `compare` only (selftest-compare); 0: off
   bool plot = true;
   void add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb = 0);
   SweepSettings settings(const std::string& name, const std::string& plot_script) const;
@@ -40,6 +41,12 @@ struct SweepFlags {
 // The methods a command sweeps when none are named: every registered method that is not kept out
 // of default sweeps.
 std::vector<std::string> default_sweep_methods();
+
+// Thrown by a command whose outcome is an exit status other than 0 without being an error
+// (compare: 2 = regression, 3 = not comparable, 4 = work changed); main() returns `code`.
+struct ExitStatus {
+  int code = 0;
+};
 
 // True when the user gave `option` on the command line (so --quick must not override it).
 inline bool given(const CLI::Option* option) { return option->count() > 0; }
@@ -51,5 +58,7 @@ void add_buffers_command(CLI::App& app);
 void add_figure9_command(CLI::App& app);
 void add_kernels_command(CLI::App& app);
 void add_tradeoff_command(CLI::App& app);
+void add_compare_command(CLI::App& app);
+void add_selftest_compare_command(CLI::App& app);
 
 }  // namespace bokeh

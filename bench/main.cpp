@@ -16,10 +16,14 @@ int main(int argc, char** argv) {
   bokeh::add_buffers_command(app);
   bokeh::add_render_command(app);
   bokeh::add_devices_command(app);
+  bokeh::add_compare_command(app);
+  bokeh::add_selftest_compare_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const bokeh::ExitStatus& status) {
+    return status.code;
   } catch (const std::exception& e) {
     fmt::print(stderr, "bokehbench: error: {}\n", e.what());
     return 1;

@@ -1,11 +1,15 @@
 #include "report.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include <unistd.h>
 
@@ -31,6 +35,97 @@ std::string cpu_model() {
       return colon == std::string::npos ? line : line.substr(colon + 2);
     }
   return "unknown";
+}
+
+std::string read_first_line(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+// Linux's view of the CPU cores: what lavapipe and the CPU references run on.
+nlohmann::json cpu_power_state() {
+  nlohmann::json out = {{"source", "linux /proc and /sys"}};
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  std::vector<double> mhz;
+  bool hypervisor = false;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("cpu MHz", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) mhz.push_back(std::atof(line.c_str() + colon + 1));
+    } else if (line.rfind("flags", 0) == 0 && line.find(" hypervisor") != std::string::npos) {
+      hypervisor = true;
+    }
+  }
+  if (!mhz.empty())
+    out["cpuinfo_mhz"] = {{"min", *std::min_element(mhz.begin(), mhz.end())},
+                          {"max", *std::max_element(mhz.begin(), mhz.end())}};
+  out["virtualised"] = hypervisor;
+  const std::string cpufreq = "/sys/devices/system/cpu/cpu0/cpufreq/";
+  if (std::filesystem::exists(cpufreq)) {
+    out["cpufreq"] = {{"governor", read_first_line(cpufreq + "scaling_governor")},
+                      {"cur_khz", read_first_line(cpufreq + "scaling_cur_freq")},
+                      {"min_khz", read_first_line(cpufreq + "scaling_min_freq")},
+                      {"max_khz", read_first_line(cpufreq + "scaling_max_freq")}};
+  } else {
+    out["cpufreq"] = "not exposed (no /sys/devices/system/cpu/cpu0/cpufreq: typical of a VM; the host sets the clock)";
+  }
+  if (std::filesystem::exists("/sys/devices/system/cpu/intel_pstate/no_turbo"))
+    out["intel_no_turbo"] = read_first_line("/sys/devices/system/cpu/intel_pstate/no_turbo");
+  if (std::filesystem::exists("/sys/devices/system/cpu/cpufreq/boost"))
+    out["boost"] = read_first_line("/sys/devices/system/cpu/cpufreq/boost");
+  // Other work on the machine: on a shared machine this moves every number.
+  out["load_average"] = read_first_line("/proc/loadavg");
+  return out;
+}
+
+// Runs `cmd` through the shell; returns its exit status and output.
+std::pair<int, std::string> run_command(const std::string& cmd) {
+  std::string text;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (!pipe) return {-1, "cannot start a shell"};
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) text += buf;
+  return {::pclose(pipe), text};
+}
+
+// nvidia-smi's view of NVIDIA GPUs. A field it does not know fails the whole query, and drivers
+// from 535 on call the throttle reasons "clocks_event_reasons": so the query is tried with the new
+// name, the old one, then none.
+nlohmann::json nvidia_power_state() {
+  const std::vector<std::string> common = {"name",         "pci.bus_id",      "pstate",          "clocks.sm",
+                                           "clocks.max.sm", "clocks.mem",     "clocks.max.mem",  "power.draw",
+                                           "power.limit",  "temperature.gpu", "persistence_mode"};
+  std::string last_error;
+  for (const char* reasons : {"clocks_event_reasons.active", "clocks_throttle_reasons.active", ""}) {
+    std::vector<std::string> fields = common;
+    if (*reasons) fields.push_back(reasons);
+    std::string query;
+    for (const auto& f : fields) query += (query.empty() ? "" : ",") + f;
+    const auto [status, text] =
+        run_command("timeout 10 nvidia-smi --query-gpu=" + query + " --format=csv,noheader,nounits 2>&1");
+    if (status != 0) {
+      last_error = text.empty() ? "nvidia-smi is missing or failed" : text;
+      continue;
+    }
+    nlohmann::json gpus = nlohmann::json::array();
+    std::istringstream lines(text);
+    for (std::string row; std::getline(lines, row);) {
+      nlohmann::json gpu = nlohmann::json::object();
+      std::istringstream cells(row);
+      std::string cell;
+      for (const auto& f : fields) {
+        if (!std::getline(cells, cell, ',')) break;
+        const auto first = cell.find_first_not_of(' ');
+        gpu[f] = first == std::string::npos ? "" : cell.substr(first);
+      }
+      gpus.push_back(gpu);
+    }
+    return {{"source", "nvidia-smi"}, {"units", "MHz, W, degrees C"}, {"gpus", gpus}};
+  }
+  return {{"source", "nvidia-smi"}, {"error", last_error}};
 }
 
 std::string env_or(const char* name, const char* fallback) {
@@ -66,8 +161,22 @@ nlohmann::json run_context(const vk::DeviceInfo* device) {
       {"cpu_cores", std::thread::hardware_concurrency()},
       // lavapipe's worker threads; unset means one per core.
       {"lp_num_threads", env_or("LP_NUM_THREADS", "unset")},
-      {"device", device ? device_json(*device) : nlohmann::json(nullptr)}};
+      {"device", device ? device_json(*device) : nlohmann::json(nullptr)},
+      {"power_state", {{"start", power_state(device)}}}};
   return ctx;
+}
+
+nlohmann::json power_state(const vk::DeviceInfo* device) {
+  nlohmann::json out = {{"cpu", cpu_power_state()}};
+  if (!device) return out;
+  if (device->type == "cpu")
+    out["device"] = "a CPU device (lavapipe): its clock is the CPU's, above";
+  else if (device->vendor_id == 0x10de)
+    out["device"] = nvidia_power_state();
+  else
+    out["device"] = fmt::format("unknown: core Vulkan has no clock or power query, and bokehbench reads no vendor tool for "
+                                "vendor 0x{:04x}", device->vendor_id);
+  return out;
 }
 
 void ensure_parent_dir(const std::string& path) {

@@ -13,7 +13,15 @@ namespace bokeh {
 constexpr int kSchemaVersion = 2;  // 2: one point format for every sweep (bench/runner/sweep.cpp)
 
 // Device, driver, machine and build: what a reader needs to trust or compare a number.
+// Includes power_state.start (see power_state()).
 nlohmann::json run_context(const vk::DeviceInfo* device);
+
+// What is known of clocks and power state now, and where it came from. Core Vulkan exposes no
+// clock or power query, so: the CPU's from Linux (/proc/cpuinfo MHz, cpufreq governor and limits
+// where the kernel has them, load average, virtualisation); an NVIDIA GPU's from `nvidia-smi`
+// (SM and memory clocks with their maxima, performance state, power draw and limit, temperature,
+// throttle reasons); other GPUs: recorded as unknown, with why.
+nlohmann::json power_state(const vk::DeviceInfo* device);
 nlohmann::json device_json(const vk::DeviceInfo& device);
 
 // Wraps `body` as {"schema": name, "schema_version", "context", ...body} and writes it atomically.

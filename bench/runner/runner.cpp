@@ -5,9 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <ctime>
 #include <list>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 namespace bokeh::runner {
 
@@ -31,6 +33,12 @@ extern "C" void on_signal(int) {
     return;
   }
   if (t - first > 1000) std::_Exit(130);
+}
+
+double process_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -82,6 +90,12 @@ std::vector<double> PointRecord::frame_ms() const {
   return out;
 }
 
+std::vector<double> PointRecord::cpu_ms() const {
+  std::vector<double> out;
+  for (const auto& s : samples) out.push_back(s.cpu_ms);
+  return out;
+}
+
 namespace {
 
 // Frames per sample from a pilot frame's time.
@@ -90,22 +104,57 @@ int frames_for(double pilot_ms, const Policy& p) {
   return std::clamp(static_cast<int>(std::ceil(p.sample_min_ms / pilot_ms)), 1, p.max_frames_per_sample);
 }
 
-// Warms up, then runs single frames while they still get faster by more than 3% (clocks ramping
-// up), as long as they are short; returns the last frame's time.
+// Warms up: the target's own warm-up (JIT compilation), a pilot frame, then batches as long as a
+// sample until two in a row are no faster than the fastest so far by 3% (clocks ramping from
+// idle). Batches, not single frames: between single short frames a GPU waits on the host and
+// idles, so its clocks stay low and the ramp never shows; and a pilot taken at idle clocks would
+// size samples several times too short. Returns the last batch's frame time.
 double warm_up(Target& target, const Policy& p, PointRecord& rec) {
   const auto start = std::chrono::steady_clock::now();
   target.warm_up();
-  double best = target.measure(1).frame_ms;
-  rec.warm_up_ms.push_back(best);
-  double last = best;
+  double last = target.measure(1).frame_ms;
+  rec.warm_up_ms.push_back(last);
+  if (last >= p.sample_min_ms) return last;  // one frame fills a sample: it keeps the device busy by itself
+  double best = last;
   int not_falling = 0;
-  while (last < p.sample_min_ms && not_falling < 2 && seconds_since(start) < p.warm_up_max_s) {
-    last = target.measure(1).frame_ms;
+  while (not_falling < 2 && seconds_since(start) < p.warm_up_max_s) {
+    last = target.measure(frames_for(last, p)).frame_ms;
     rec.warm_up_ms.push_back(last);
     if (last < 0.97 * best) not_falling = 0; else ++not_falling;
     best = std::min(best, last);
   }
   return last;
+}
+
+// `frames` frames, with the process CPU time they took per `reported` frame.
+Sample timed(Target& target, int frames, int reported) {
+  const double cpu_start = process_cpu_ms();
+  Sample s = target.measure(frames);
+  s.cpu_ms = (process_cpu_ms() - cpu_start) / reported;
+  return s;
+}
+
+// Whole frames that make `extra_work_fraction` of `frames` (0 when off).
+int extra_frames(int frames, const Policy& p) {
+  return static_cast<int>(std::lround(frames * p.extra_work_fraction));
+}
+
+// Frames per sample of a point: from its warmed-up frame time, and with extra work injected, a
+// multiple of 100/gcd(p, 100) so that the extra is whole frames.
+int point_frames(double frame_ms, const Policy& p) {
+  int frames = frames_for(frame_ms, p);
+  if (p.extra_work_fraction > 0) {
+    const int unit = static_cast<int>(100 / std::gcd(std::lround(p.extra_work_fraction * 100), 100L));
+    frames = (frames + unit - 1) / unit * unit;
+  }
+  return frames;
+}
+
+// Untimed frames before a sample (Policy::lead_in_ms), sized from the target's last frame time.
+void lead_in(Target& target, double frame_ms, const Policy& p) {
+  if (p.lead_in_ms <= 0) return;
+  const double ms = frame_ms > 0 ? frame_ms : p.lead_in_ms;
+  target.measure(std::clamp(static_cast<int>(std::ceil(p.lead_in_ms / ms)), 1, p.max_frames_per_sample));
 }
 
 bool settled(const PointRecord& r, const Policy& p) {
@@ -118,6 +167,9 @@ bool settled(const PointRecord& r, const Policy& p) {
 
 RunRecord run(const std::vector<std::string>& names, const std::vector<std::string>& skip, const Policy& policy,
               Hooks& hooks) {
+  const double extra_pct = policy.extra_work_fraction * 100;
+  if (extra_pct < 0 || extra_pct > 100 || std::abs(extra_pct - std::round(extra_pct)) > 1e-9)
+    throw std::invalid_argument("extra work must be a whole percentage from 0 to 100");
   const auto start = std::chrono::steady_clock::now();
   RunRecord record;
   std::vector<std::size_t> active;
@@ -164,8 +216,12 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
       if (round == 0) {
         PointRecord warm;
         probe_frames[name] = frames_for(warm_up(*probe, policy, warm), policy);
+      } else {
+        lead_in(*probe, record.probe_ms[name].back(), policy);
       }
-      record.probe_ms[name].push_back(probe->measure(probe_frames[name]).frame_ms);
+      const Sample s = timed(*probe, probe_frames[name], probe_frames[name]);
+      record.probe_ms[name].push_back(s.frame_ms);
+      record.probe_cpu_ms[name].push_back(s.cpu_ms);
     }
     for (std::size_t i : order) {
       if (interrupted()) break;
@@ -178,7 +234,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
           ++rec.preparations;
           it = live.emplace(i, std::move(target)).first;
           if (rec.frames_per_sample == 0) {
-            rec.frames_per_sample = frames_for(warm_up(*it->second, policy, rec), policy);
+            rec.frames_per_sample = point_frames(warm_up(*it->second, policy, rec), policy);
             if (hooks.first_ready) hooks.first_ready(i, *it->second);
           } else {
             it->second->warm_up();  // freed earlier to save memory: compile caches are warm already
@@ -187,7 +243,15 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
         }
         recency.remove(i);
         recency.push_back(i);
-        rec.samples.push_back(it->second->measure(rec.frames_per_sample));
+        lead_in(*it->second, rec.samples.empty() ? rec.warm_up_ms.back() : rec.samples.back().frame_ms, policy);
+        const int frames = rec.frames_per_sample, extra = extra_frames(frames, policy);
+        Sample sample = timed(*it->second, frames + extra, frames);
+        if (extra > 0) {  // the extra frames' time counts, spread over the frames reported
+          const double scale = static_cast<double>(frames + extra) / frames;
+          sample.frame_ms *= scale;
+          for (auto& [pass, ms] : sample.pass_ms) ms *= scale;
+        }
+        rec.samples.push_back(std::move(sample));
         rec.sample_round.push_back(round);
       } catch (const std::exception& e) {
         skip_point(i, e.what());

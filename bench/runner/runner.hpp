@@ -23,6 +23,10 @@ namespace bokeh::runner {
 struct Sample {
   double frame_ms = 0;                    // mean over the sample's frames
   std::map<std::string, double> pass_ms;  // per pass, mean per frame (GPU timestamps; empty on the CPU)
+  // The process's CPU time per frame over the sample, all threads (set by the runner). With
+  // lavapipe and the CPU references this is the work done, which other processes competing for
+  // the cores do not inflate the way they inflate wall-clock time; on a real GPU it is host overhead.
+  double cpu_ms = 0;
 };
 
 // A point made ready to measure: its resources allocated and its inputs uploaded.
@@ -40,10 +44,17 @@ struct Policy {
   int max_samples = 15;
   double settled_relative_iqr = 0.05;
   double sample_min_ms = 60;           // a sample runs enough frames to last at least this long
-  int max_frames_per_sample = 256;
-  // Warm-up goes on while successive short frames still get faster (clocks ramping from idle),
-  // for at most this long; frames longer than sample_min_ms warm up with one frame.
+  int max_frames_per_sample = 4096;    // so that frames of 0.015 ms (a fast GPU, small image) still fill one
+  // Warm-up runs batches as long as a sample while successive batches still get faster (clocks
+  // ramping from idle), for at most this long; frames longer than sample_min_ms warm up with one frame.
   double warm_up_max_s = 3;
+  // Before every sample (and probe), frames worth this long run untimed: a discrete GPU left idle
+  // while other points (or the CPU references) ran has lowered its clocks by then. 0: none.
+  double lead_in_ms = 0;
+  // A test of `compare` (--inject-slowdown-pct), 0 in real runs: every sample runs this fraction
+  // more frames than it reports, so each point's frame time grows by exactly that fraction of its
+  // own work. It must be p/100 with a whole p; frames per sample become multiples of 100/gcd(p, 100).
+  double extra_work_fraction = 0;
   std::uint64_t resident_limit_bytes = 4ull << 30;  // live targets beyond this are freed, least recent first
   std::uint64_t seed = 1;                            // of the shuffled visiting order
 };
@@ -60,12 +71,14 @@ struct PointRecord {
   bool settled = false;
 
   std::vector<double> frame_ms() const;
+  std::vector<double> cpu_ms() const;
 };
 
 struct RunRecord {
   std::vector<PointRecord> points;
   std::vector<std::vector<std::size_t>> round_order;   // per round, the point indices in visiting order
   std::map<std::string, std::vector<double>> probe_ms;  // per probe, one time per round
+  std::map<std::string, std::vector<double>> probe_cpu_ms;  // per probe, its process CPU time per round
   std::string status = "partial";                       // partial (running), complete, interrupted
   double elapsed_s = 0;
 };

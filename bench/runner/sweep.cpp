@@ -283,6 +283,7 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
           {"relative_iqr", d.relative_iqr()},
           {"pass_ms", pass_ms},
           {"samples_ms", frame},
+          {"samples_cpu_ms", rec.cpu_ms()},
           {"sample_rounds", rec.sample_round},
           {"frames_per_sample", rec.frames_per_sample},
           {"warm_up_ms", rec.warm_up_ms},
@@ -373,7 +374,11 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
       if (p.backend == "gpu") wanted.add(p.method->needs(p.options));
     ctx.emplace(s.device, wanted);
   }
-  const nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
+  nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
+  runner::Policy policy = s.policy;
+  // A GPU (not lavapipe) drops its clocks while the CPU references and other points run: each
+  // sample gets an untimed lead-in of a quarter sample first.
+  if (ctx && !ctx->info().is_software() && policy.lead_in_ms == 0) policy.lead_in_ms = policy.sample_min_ms / 4;
 
   // Plan: what cannot run is known before anything is allocated.
   std::vector<std::string> names, skip(points.size());
@@ -473,6 +478,9 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const std::string gbench_path = (out_dir / (s.name + "_gbench.json")).string();
   const std::string gbench_partial = (out_dir / (s.name + "_gbench.partial.json")).string();
 
+  nlohmann::json config = s.config;
+  if (policy.extra_work_fraction > 0)  // a test of `compare`, never a real run: say so where it shows
+    config["injected_slowdown_pct"] = std::lround(policy.extra_work_fraction * 100);
   auto document = [&](const runner::RunRecord& rec) {
     nlohmann::json measured = nlohmann::json::array(), skipped = nlohmann::json::array();
     for (std::size_t i = 0; i < points.size(); ++i) {
@@ -496,6 +504,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
       if (it == rec.probe_ms.end() || it->second.empty()) continue;
       const runner::Distribution d = runner::distribution(it->second);
       probes[k.name] = {{"ms_per_round", it->second},
+                        {"cpu_ms_per_round", rec.probe_cpu_ms.at(k.name)},
                         {"ms", distribution_json(d)},
                         {"drift", d.median > 0 ? (d.max - d.min) / d.median : 0.0},
                         {"bytes", k.bytes},
@@ -512,7 +521,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     }
     nlohmann::json doc = {
         {"status", rec.status},
-        {"config", s.config},
+        {"config", config},
         {"methods", methods_json(points)},
         {"measurement",
          {{"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded); "
@@ -523,12 +532,15 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
           {"max_samples", s.policy.max_samples},
           {"settled_relative_iqr", s.policy.settled_relative_iqr},
           {"sample_min_ms", s.policy.sample_min_ms},
+          {"lead_in_ms", policy.lead_in_ms},
+          {"extra_work_fraction", policy.extra_work_fraction},
           {"rounds", rec.round_order.size()},
           {"round_order", order},
           {"probes", probes},
           {"limits", limits},
           {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "
-                     "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included"}}},
+                     "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included; "
+                     "samples_cpu_ms: the process CPU time (all threads) per frame over the same sample"}}},
         {"points", measured},
         {"skipped", skipped},
         {"elapsed_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()}};
@@ -567,8 +579,9 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   runner::RunRecord record;
   {
     runner::InterruptScope interrupts;
-    record = runner::run(names, skip, s.policy, hooks);
+    record = runner::run(names, skip, policy, hooks);
   }
+  context["power_state"]["end"] = power_state(ctx ? &ctx->info() : nullptr);
   nlohmann::json doc = document(record);
   const bool complete = record.status == "complete";
   if (s.derive) s.derive(doc);

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <ctime>
 #include <map>
 #include <set>
 
@@ -202,6 +204,146 @@ TEST(Runner, DistributionMatchesHandComputedQuartiles) {
   EXPECT_DOUBLE_EQ(d.max, 5);
   EXPECT_DOUBLE_EQ(d.mean, 3);
   EXPECT_NEAR(d.relative_iqr(), 2.0 / 3.0, 1e-12);
+}
+
+TEST(Runner, InjectedExtraWorkRunsWholeExtraFramesAndCountsThem) {
+  // --inject-slowdown-pct: every sample runs 25% more frames than it reports, so a point whose
+  // frames take exactly 1 ms reads 1.25 ms; frames per sample become a multiple of 4.
+  Harness h;
+  Policy p = fast_policy();
+  p.extra_work_fraction = 0.25;
+  std::vector<int> frames_asked;
+  struct Counting : runner::Target {
+    std::vector<int>& asked;
+    explicit Counting(std::vector<int>& a) : asked(a) {}
+    void warm_up() override {}
+    Sample measure(int frames) override {
+      asked.push_back(frames);
+      return {1.0, {{"pass", 0.4}}};
+    }
+  };
+  runner::Hooks hooks;
+  hooks.prepare = [&](std::size_t) -> std::unique_ptr<runner::Target> { return std::make_unique<Counting>(frames_asked); };
+  const RunRecord r = runner::run({"p0"}, {}, p, hooks);
+  const auto& pt = r.points[0];
+  EXPECT_EQ(pt.frames_per_sample, 12) << "ceil(10 ms / 1 ms) = 10, rounded up to a multiple of 4";
+  ASSERT_EQ(pt.samples.size(), 3u);
+  for (const auto& s : pt.samples) {
+    EXPECT_DOUBLE_EQ(s.frame_ms, 1.25);
+    EXPECT_DOUBLE_EQ(s.pass_ms.at("pass"), 0.5);
+  }
+  EXPECT_EQ(frames_asked.back(), 15) << "12 frames reported, 3 more run";
+  p.extra_work_fraction = 0.125;  // not a whole percentage
+  EXPECT_THROW(runner::run({"p0"}, {}, p, hooks), std::invalid_argument);
+}
+
+TEST(Runner, SamplesRecordTheProcessCpuTimePerFrame) {
+  // A target whose every frame burns 2 ms of this process's CPU time (spinning on the CPU-time
+  // clock itself): each sample's cpu_ms is 2 ms, however long the wall clock took.
+  struct Burning : runner::Target {
+    void warm_up() override {}
+    Sample measure(int frames) override {
+      const auto cpu_now = [] {
+        timespec t{};
+        clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+        return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+      };
+      const double until = cpu_now() + 2.0 * frames;
+      while (cpu_now() < until) {
+      }
+      return {2.0, {}};
+    }
+  };
+  Policy p = fast_policy();
+  p.sample_min_ms = 4;
+  runner::Hooks hooks;
+  hooks.prepare = [](std::size_t) -> std::unique_ptr<runner::Target> { return std::make_unique<Burning>(); };
+  hooks.probes.emplace_back("probe", std::make_unique<Burning>());
+  const RunRecord r = runner::run({"p0"}, {}, p, hooks);
+  for (const auto& s : r.points[0].samples) {
+    EXPECT_GE(s.cpu_ms, 2.0);
+    EXPECT_LT(s.cpu_ms, 2.5);
+  }
+  ASSERT_EQ(r.probe_cpu_ms.at("probe").size(), r.round_order.size());
+  for (double ms : r.probe_cpu_ms.at("probe")) EXPECT_GE(ms, 2.0);
+}
+
+// A device whose clock ramps up with work and decays while idle (a discrete GPU's behaviour, in a
+// model: the constants are this test's, not any GPU's). Frames on it take base_ms at full clock and
+// 4x that at idle.
+struct ClockedDevice {
+  double boost = 0;  // 0 idle .. 1 full clock
+  double speed() const { return 0.25 + 0.75 * boost; }
+  void busy(double ms) { boost = 1 - (1 - boost) * std::exp(-ms / 4.0); }
+  void idle(double ms) { boost *= std::exp(-ms / 10.0); }
+};
+
+class ClockedTarget : public runner::Target {
+ public:
+  ClockedTarget(ClockedDevice& d, double base_ms) : device_(d), base_ms_(base_ms) {}
+  void warm_up() override {}
+  Sample measure(int frames) override {
+    double total = 0;
+    for (int f = 0; f < frames; ++f) {
+      const double ms = base_ms_ / device_.speed();
+      device_.busy(ms);
+      total += ms;
+    }
+    return {total / frames, {}};
+  }
+
+ private:
+  ClockedDevice& device_;
+  double base_ms_;
+};
+
+// The CPU reference of a sweep: the device idles while it runs.
+class HostTarget : public runner::Target {
+ public:
+  HostTarget(ClockedDevice& d, double ms) : device_(d), ms_(ms) {}
+  void warm_up() override {}
+  Sample measure(int frames) override {
+    device_.idle(ms_ * frames);
+    return {ms_, {}};
+  }
+
+ private:
+  ClockedDevice& device_;
+  double ms_;
+};
+
+TEST(Runner, WarmUpRunsBatchesUntilTheClockHasRamped) {
+  ClockedDevice device;
+  Policy p = fast_policy();
+  p.warm_up_max_s = 10;
+  runner::Hooks hooks;
+  hooks.prepare = [&](std::size_t) -> std::unique_ptr<runner::Target> { return std::make_unique<ClockedTarget>(device, 0.1); };
+  const RunRecord r = runner::run({"gpu"}, {}, p, hooks);
+  const auto& pt = r.points[0];
+  EXPECT_NEAR(pt.warm_up_ms.front(), 0.4, 0.01) << "the pilot frame runs at idle clock";
+  EXPECT_GE(pt.warm_up_ms.size(), 4u) << "pilot, then batches while they still get faster, then two that do not";
+  EXPECT_NEAR(runner::distribution(pt.frame_ms()).median, 0.1, 0.002) << "samples at full clock";
+  EXPECT_EQ(pt.frames_per_sample, 100) << "sized from the warmed-up frame (10 ms / 0.1 ms), not the idle pilot's 25";
+}
+
+TEST(Runner, ALeadInBeforeEachSampleUndoesTheIdleTimeOfInterleavedCpuPoints) {
+  auto gpu_median = [](double lead_in_ms) {
+    ClockedDevice device;
+    Policy p = fast_policy();
+    p.warm_up_max_s = 10;
+    p.min_samples = p.max_samples = 12;
+    p.sample_min_ms = 2;
+    p.lead_in_ms = lead_in_ms;
+    runner::Hooks hooks;
+    hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
+      if (i == 0) return std::make_unique<ClockedTarget>(device, 0.1);
+      return std::make_unique<HostTarget>(device, 50);
+    };
+    const RunRecord r = runner::run({"gpu", "cpu"}, {}, p, hooks);
+    return runner::distribution(r.points[0].frame_ms()).median;
+  };
+  EXPECT_GT(gpu_median(0), 0.15) << "without a lead-in the samples after the CPU point start at idle clock";
+  EXPECT_NEAR(gpu_median(20), 0.1, 0.005);
 }
 
 // ---- The sweep's axes (the real registry; nothing is measured). ----
