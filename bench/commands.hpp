@@ -51,5 +51,6 @@ void add_buffers_command(CLI::App& app);
 void add_figure9_command(CLI::App& app);
 void add_kernels_command(CLI::App& app);
 void add_tradeoff_command(CLI::App& app);
+void add_stability_command(CLI::App& app);
 
 }  // namespace bokeh

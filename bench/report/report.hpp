@@ -27,6 +27,12 @@ void write_text_atomically(const std::string& path, const std::string& text);
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);
 
+// Before any work: throws std::runtime_error naming the path unless a file can be written there
+// (it is not a directory, its folder exists or can be created, and a file can be created in it).
+void check_writable_file(const std::string& path);
+// The same for a folder that files will be written into (created if missing).
+void check_writable_dir(const std::string& dir);
+
 // Runs plots/<script> with Debian's python3 (which has matplotlib): script JSON OUT_PREFIX.
 // Throws if it fails; the results file is already written by then.
 void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix);

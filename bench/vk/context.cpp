@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "memory.hpp"  // MemoryBlocks, owned here
 #include "vk_check.hpp"
 
 namespace bokeh::vk {

@@ -1,6 +1,7 @@
 // flag: FLAG (Moersch & Hamilton 2014), section 3.2, with reduced-precision and reduced-resolution
 // 3D buffers (section 5).
 #include <cmath>
+#include <limits>
 
 #include "flag.hpp"
 #include "flag_gpu.hpp"
@@ -115,6 +116,16 @@ void declare_flag(std::vector<Method>& methods) {
       case LayerPrecision::f16: return std::ldexp(1.0, -10);
       case LayerPrecision::r11g11b10f: return std::ldexp(1.0, -5);
       default: return static_cast<double>(reduced_pattern(o.pattern, o.buffer_scale).size_n) / bracket_levels(p);
+    }
+  };
+  // An isolated highlight in focus is stored as it is (its disc's area is 1), so the layer format's
+  // largest finite value bounds it: f16 65504, r11g11b10f blue's (2 - 2^-5) 2^15 = 64512 (red and
+  // green reach 65024). f32 and the bracketed formats (offsets and scales in f32) have f32's range.
+  m.input_limit = [](const FilterOptions& o) {
+    switch (layer_precision_from_string(o.precision)) {
+      case LayerPrecision::f16: return 65504.0;
+      case LayerPrecision::r11g11b10f: return 64512.0;
+      default: return static_cast<double>(std::numeric_limits<float>::max());
     }
   };
   m.energy_note = "the same sums as naive (each source's contributions sum to its colour), up to the layers' storage";
