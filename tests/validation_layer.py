@@ -51,11 +51,12 @@ def main(allowlist, command):
     if not any("Insert" in l or "insert" in l for l in loader_lines):
         print(output[-4000:])
         sys.exit("the loader did not report inserting VK_LAYER_KHRONOS_validation: nothing was validated")
-    messages = [m for m in re.split(r"\n(?=Validation )", text) if m.startswith("Validation ")]
+    # Each message starts unindented, "ID(SEVERITY / TYPE): msgNum: N - text", with indented lines after.
+    messages = re.split(r"\n(?=\S+\([A-Z]+ / [A-Z]+\): msgNum:)", text.strip()) if text.strip() else []
     counts = collections.Counter()
     undocumented = []
     for m in messages:
-        found = re.match(r"Validation [^:]*: \[ ?([^\] ]+) ?\]", m)
+        found = re.match(r"(\S+)\([A-Z]+ / [A-Z]+\): msgNum:", m)
         message_id = found.group(1) if found else m.splitlines()[0]
         counts[message_id] += 1
         if message_id not in allowed:
