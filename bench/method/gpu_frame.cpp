@@ -63,6 +63,7 @@ std::vector<vk::PassTime> run_frames(GpuFrame& frame, GpuFilter& filter, vk::Tim
       timer.end_pass(cmd, "coc");
       filter.record(cmd, timer);
     }
+    timer.end_frame(cmd);
   });
   return vk::mean_per_frame(timer.read(), frames);
 }

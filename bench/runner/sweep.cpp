@@ -161,6 +161,13 @@ class GpuTarget final : public runner::Target {
     return 4ull * frame_.width() * frame_.height() * 16 + filter_->intermediate_bytes();
   }
   Image output() { return frame_.read_output(); }
+  // One frame with the per-pass counters on (outside the timed samples).
+  std::vector<vk::PassTime> counted_frame() {
+    timer_.count_invocations(true);
+    auto passes = gpu::run_frames(frame_, *filter_, timer_, 1);
+    timer_.count_invocations(false);
+    return passes;
+  }
 
  private:
   gpu::GpuFrame frame_;
@@ -204,6 +211,7 @@ std::string duration_text(double s) {
 struct PointInfo {
   double f_stop = 0;
   nlohmann::json memory, work, error;
+  nlohmann::json counters = nlohmann::json::object();  // GPU: per pass, commands and shader invocations
 };
 
 nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
@@ -254,8 +262,13 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
     }
   }
   const runner::Distribution d = runner::distribution(frame);
-  if (p.backend == "cpu" && d.median > 0)
-    throughput["frame"] = {{"taps_per_s", info.work["taps"].get<double>() / (d.median * 1e-3)}};
+  if (p.backend == "cpu" && d.median > 0) {  // the CPU reference is timed whole
+    double bytes = 0;
+    for (const auto& [pass, w] : info.work["passes"].items())
+      bytes += w["bytes_read"].get<double>() + w["bytes_written"].get<double>();
+    throughput["frame"] = {{"taps_per_s", info.work["taps"].get<double>() / (d.median * 1e-3)},
+                           {"gb_per_s", bytes / (d.median * 1e6)}};
+  }
   nlohmann::json out = identity_json(p);
   out.update({          {"f_stop", info.f_stop},
           {"frame_ms", distribution_json(d)},
@@ -268,6 +281,7 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
           {"settled", rec.settled},
           {"measure_wall_s", rec.wall_s},
           {"work", info.work},
+          {"counters", info.counters},
           {"throughput", throughput},
           {"memory", info.memory},
           {"error", info.error}});
@@ -419,7 +433,14 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     return std::make_unique<CpuTarget>(*p.method, scene, lens, p.options, threads);
   };
   hooks.first_ready = [&](std::size_t i, runner::Target& t) {
-    if (auto* g = dynamic_cast<GpuTarget*>(&t)) first_ready(i, g->output());
+    if (auto* g = dynamic_cast<GpuTarget*>(&t)) {
+      info[i].counters = nlohmann::json::object();
+      for (const auto& pass : g->counted_frame()) {
+        info[i].counters[pass.pass] = {{"commands", pass.commands}};
+        if (pass.invocations >= 0) info[i].counters[pass.pass]["compute_invocations"] = pass.invocations;
+      }
+      first_ready(i, g->output());
+    }
     if (auto* c = dynamic_cast<CpuTarget*>(&t)) first_ready(i, c->output());
   };
   std::vector<CalibrationKernel> calibration;
@@ -464,6 +485,13 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
                         {"flops", k.flops}};
       if (k.bytes > 0) limits[k.name + "_gb_per_s"] = k.bytes / (d.median * 1e6);
       if (k.flops > 0) limits[k.name + "_gflop_per_s"] = k.flops / (d.median * 1e6);
+    }
+    // Each pass's bandwidth as a fraction of the copy kernel's, measured in the same run.
+    for (auto& point : measured) {
+      const std::string limit = point["backend"].get<std::string>() + "_copy_gb_per_s";
+      if (!limits.contains(limit)) continue;
+      for (auto& [pass, t] : point["throughput"].items())
+        if (t.contains("gb_per_s")) t["fraction_of_copy_bandwidth"] = t["gb_per_s"].get<double>() / limits[limit].get<double>();
     }
     nlohmann::json doc = {
         {"status", rec.status},

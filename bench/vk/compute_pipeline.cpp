@@ -140,6 +140,7 @@ void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, 
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, shared_->layout, 0, 1, &set_, 0, nullptr);
   if (push_constant_bytes_ > 0)
     vkCmdPushConstants(cmd, shared_->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_, push_constants);
+  ++ctx_.commands_recorded;
   vkCmdDispatch(cmd, (invocations_x + local_size_x_ - 1) / local_size_x_,
                 (invocations_y + local_size_y_ - 1) / local_size_y_, 1);
   // The next pass, or a vkCmdFillBuffer that resets a buffer for the next frame of a batch (which must

@@ -189,10 +189,10 @@ Context::Context(const std::string& selector, const DeviceRequirements& wanted) 
   VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
   device_info.queueCreateInfoCount = 1;
   device_info.pQueueCreateInfos = &queue_info;
-  // Nothing optional is enabled; asking first is what the best-practices layer expects.
-  VkPhysicalDeviceFeatures supported{};
+  VkPhysicalDeviceFeatures supported{}, features{};
   vkGetPhysicalDeviceFeatures(physical_, &supported);
-  VkPhysicalDeviceFeatures features{};
+  features.pipelineStatisticsQuery = supported.pipelineStatisticsQuery;
+  info_.pipeline_statistics = supported.pipelineStatisticsQuery == VK_TRUE;
   device_info.pEnabledFeatures = &features;
   VkDevice device = VK_NULL_HANDLE;
   VK_CHECK(vkCreateDevice(physical_, &device_info, nullptr, &device));

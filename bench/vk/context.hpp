@@ -27,6 +27,7 @@ struct DeviceInfo {
   std::uint64_t max_storage_buffer_range_bytes = 0;
   std::uint32_t max_image_dimension_3d = 0;
   std::uint64_t device_local_heap_bytes = 0;
+  bool pipeline_statistics = false;  // pipelineStatisticsQuery (enabled when present)
   bool is_software() const { return type == "cpu"; }
 };
 
@@ -68,6 +69,10 @@ class Context {
   // Equal pipelines (same SPIR-V, bindings, constants) share one compiled pipeline: a sweep that
   // re-creates a method's passes neither recompiles nor re-JITs them (lavapipe compiles on first use).
   std::map<std::string, std::shared_ptr<PipelineObjects>>& pipeline_cache() { return pipeline_cache_; }
+
+  // Dispatches and draws recorded so far (the recording wrappers count them; TimestampQueries
+  // attributes them to passes).
+  std::uint64_t commands_recorded = 0;
 
   std::uint32_t find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted,
                                  VkMemoryPropertyFlags fallback) const;

@@ -1,6 +1,9 @@
 #pragma once
 // The one GPU timing path: a timestamp before the first pass and after each pass, in one
-// submission; pass times are the differences, the frame time is last minus first.
+// submission; pass times are the differences, the frame time is last minus first. On request it
+// also counts, per pass, the commands recorded (dispatches, draws) and the compute-shader
+// invocations (pipeline-statistics queries, where the device has them): counters that do not
+// depend on timing.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -15,6 +18,8 @@ namespace bokeh::vk {
 struct PassTime {
   std::string pass;
   double ms = 0;
+  std::uint64_t commands = 0;      // dispatches and draws recorded in the pass
+  std::int64_t invocations = -1;   // compute-shader invocations; -1 when not counted
 };
 
 class TimestampQueries {
@@ -25,16 +30,24 @@ class TimestampQueries {
   // call outside recording.
   void reserve(std::uint32_t stamps);
 
+  // Count compute-shader invocations per pass from the next frame on (ignored without device
+  // support: DeviceInfo::pipeline_statistics). Queries cost a little: take counts outside timing.
+  void count_invocations(bool on);
+
   void begin_frame(VkCommandBuffer cmd);                       // resets and writes the start stamp
   void end_pass(VkCommandBuffer cmd, const std::string& pass);  // stamp once all prior work is done
+  void end_frame(VkCommandBuffer cmd);                          // closes the last pass's counters
   // After the submission completed: per-pass milliseconds in recording order.
   std::vector<PassTime> read() const;
 
  private:
   Context& ctx_;
   std::uint32_t capacity_ = 0;
-  Handle<VkQueryPool> pool_;
+  Handle<VkQueryPool> pool_, statistics_;
+  bool counting_ = false;
   std::vector<std::string> passes_;
+  std::vector<std::uint64_t> commands_;  // per pass
+  std::uint64_t commands_at_pass_start_ = 0;
 };
 
 double frame_ms(const std::vector<PassTime>& passes);
