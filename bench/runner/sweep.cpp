@@ -556,7 +556,14 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const bool complete = record.status == "complete";
   if (s.derive) s.derive(doc);
   // gbench's own statistics and names, for compare.py.
-  write_text_atomically(complete ? gbench_path : gbench_partial, gbench_json(s.name, points, record));
+  // Nothing measured yet (interrupted during the first visit, or every point skipped): gbench would
+  // write only "Failed to match any benchmarks", so write an empty but valid document instead.
+  const bool any_samples = std::any_of(record.points.begin(), record.points.end(),
+                                      [](const runner::PointRecord& r) { return !r.samples.empty(); });
+  const std::string gbench =
+      any_samples ? gbench_json(s.name, points, record)
+                  : nlohmann::json({{"context", context}, {"benchmarks", nlohmann::json::array()}}).dump(2) + "\n";
+  write_text_atomically(complete ? gbench_path : gbench_partial, gbench);
   if (!complete) {
     write_results(partial_path, "bokehbench." + s.name, context, doc);
     throw std::runtime_error(fmt::format("interrupted after {} rounds: what was measured is in {} (earlier complete "
