@@ -93,6 +93,9 @@ def main(bokehbench, workdir):
         out, _ = p.communicate(timeout=180)
         assert p.returncode == 0, out
     print(f"two concurrent runs: both complete; files {check_folder(out_dir, 'concurrent runs')}")
+    # Temporaries of writers killed mid-write are removed by the next run.
+    stale = sorted(p.name for p in out_dir.glob("*.tmp.*"))
+    assert not stale, f"stale temporaries left: {stale}"
     print("interruption and concurrency: every results file valid")
 
 

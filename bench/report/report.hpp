@@ -24,6 +24,10 @@ void write_results(const std::string& path, const std::string& schema_name, cons
 // file or the new one, never a part (the temporary's name is unique to this process).
 void write_text_atomically(const std::string& path, const std::string& text);
 
+// Removes the temporaries write_text_atomically left in `dir` when a process died mid-write (SIGKILL):
+// files named *.tmp.PID whose process no longer runs. Returns how many were removed.
+int remove_stale_temporaries(const std::string& dir);
+
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);
 

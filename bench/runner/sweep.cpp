@@ -355,6 +355,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const auto wall_start = std::chrono::steady_clock::now();
   // Where the results go is checked before anything is measured.
   check_writable_dir(s.out_dir);
+  remove_stale_temporaries(s.out_dir);
   if (s.plot && !s.plot_script.empty()) check_writable_dir(s.plots_dir);
   const int threads = s.cpu_threads > 0 ? s.cpu_threads : default_cpu_threads();
   const bool any_gpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "gpu"; });
