@@ -75,7 +75,11 @@ std::string plan_frame(vk::Context* ctx, const Method& m, const FilterOptions& o
       return fmt::format("the frame's colour buffer needs {}, over the device's maxStorageBufferRange of {} ({}x{} is "
                          "too large for {})",
                          mib(static_cast<double>(frame_buffer)), mib(static_cast<double>(range)), w, h, ctx->info().name);
-    plan.intermediates = m.gpu_memory(o, w, h, ctx);
+    try {  // asking the driver may already hit a device limit (FLAG: maxImageDimension3D)
+      plan.intermediates = m.gpu_memory(o, w, h, ctx);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
     plan.device_bytes = pixels * 52 + plan.intermediates.bytes;  // colour 16, depth 4, packed 16, output 16
     plan.host_bytes += pixels * 32;  // the RGBA upload copy and the staging buffer
   } else {
