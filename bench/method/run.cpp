@@ -1,5 +1,6 @@
 #include "run.hpp"
 
+#include <fstream>
 #include <new>
 #include <stdexcept>
 
@@ -18,6 +19,18 @@ std::string mib(double bytes) { return fmt::format("{:.1f} MiB", bytes / (1024.0
 std::uint64_t physical_memory_bytes() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
+}
+
+// MemAvailable (what can be had without swapping): Linux overcommits, so a frame larger than this
+// is not refused by the allocator but ends with the OOM killer. Falls back to the physical size.
+std::uint64_t available_memory_bytes() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  std::uint64_t kib = 0;
+  std::string unit;
+  while (meminfo >> key >> kib >> unit)
+    if (key == "MemAvailable:") return kib * 1024;
+  return physical_memory_bytes();
 }
 
 }  // namespace
@@ -94,9 +107,11 @@ std::string plan_frame(vk::Context* ctx, const Method& m, const FilterOptions& o
     return fmt::format("needs {} of device memory, more than {}'s largest device-local heap ({})",
                        mib(static_cast<double>(plan.device_bytes)), ctx->info().name,
                        mib(static_cast<double>(ctx->info().device_local_heap_bytes)));
-  if (const std::uint64_t ram = physical_memory_bytes(); ram > 0 && plan.host_bytes > ram)
-    return fmt::format("needs {} of host memory, more than this machine's {}", mib(static_cast<double>(plan.host_bytes)),
-                       mib(static_cast<double>(ram)));
+  // 80%: headroom for what the estimate leaves out (the scene's generation, the output file).
+  if (const std::uint64_t available = available_memory_bytes(); available > 0 && plan.host_bytes > available / 10 * 8)
+    return fmt::format("needs {} of host memory, more than 80% of this machine's {} available ({} in all)",
+                       mib(static_cast<double>(plan.host_bytes)), mib(static_cast<double>(available)),
+                       mib(static_cast<double>(physical_memory_bytes())));
   return "";
 }
 

@@ -36,7 +36,8 @@ struct FramePlan {
 // (Method::unsupported), the device's features, the frame's storage buffers against
 // maxStorageBufferRange, max_intermediate_mib (> 0: the --max-buffer-mb budget on the intermediates;
 // its reason reads "intermediates X MiB over --max-buffer-mb Y (not allocated)"), the device's largest
-// device-local heap and the host's physical memory. Throws for invalid options (check_options).
+// device-local heap and the host's available memory (MemAvailable: Linux overcommits, so a
+// frame beyond it would meet the OOM killer rather than std::bad_alloc). Throws for invalid options (check_options).
 std::string plan_frame(vk::Context* ctx, const Method& method, const FilterOptions& options, int width_px,
                        int height_px, double max_intermediate_mib, FramePlan& plan);
 

@@ -3,6 +3,7 @@
 
 #include "flag_memory.hpp"
 #include "flag_gpu.hpp"
+#include "method.hpp"
 #include "vk/memory.hpp"
 
 #include <cstdint>
@@ -12,6 +13,17 @@ namespace bokeh {
 namespace {
 
 const GatherPattern k41{41, 2};
+
+// The CPU FLAG reference runs in strips once its whole 3D buffer would pass 256 MiB: at 8192^2 it
+// holds well under 1 GiB instead of 8192 x 8192 x 21 layers x 12 B = 16 GiB.
+TEST(FlagMemory, CpuReferenceIsBoundedByStrips) {
+  const Method& flag = find_method("flag");
+  FilterOptions o = flag.defaults(k41);
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 800, 600), 800ull * 600 * 21 * 12);  // whole: 115 MiB
+  EXPECT_LT(flag.cpu_memory_bytes(o, 8192, 8192), 1ull << 30);
+  o.precision = "unorm16_bracketed";  // brackets whole rows: stays whole, and says so
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 21 * 12);
+}
 
 // Small buffers share blocks (the best-practices layer's advice); each keeps its own bytes, a freed
 // range is reused, and a buffer over the sub-allocation limit gets memory of its own.
