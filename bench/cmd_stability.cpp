@@ -170,12 +170,13 @@ CaseScene make_case_scene(const Case& c) {
     for (int ch = 0; ch < 3; ++ch) s.color.px(w / 2, h / 2)[ch] = static_cast<float>(c.intensity);
   s.depth_m = Image(w, h, 1, static_cast<float>(c.depth_m));
   s.lens.focus_distance_m = kFocus_m;
+  // The radius scales with the image width: fit on a row as wide as the frame.
   if (c.radius_px >= 0) {
     // The f-stop that puts radius_px at depth_m (a pinhole when it is 0).
-    s.lens = with_max_coc_radius(s.lens, Image(1, 1, 1, static_cast<float>(c.depth_m)), c.radius_px);
+    s.lens = with_max_coc_radius(s.lens, Image(w, 1, 1, static_cast<float>(c.depth_m)), c.radius_px);
   } else {
-    // Depth cases keep one lens: 4 px at 0.5 m, so far depths stay below the clamp.
-    s.lens = with_max_coc_radius(s.lens, Image(1, 1, 1, 0.5f), 4.0);
+    // Depth cases keep one lens: 4 px at 0.5 m, so far depths stay below the clamp (0.8 px at infinity).
+    s.lens = with_max_coc_radius(s.lens, Image(w, 1, 1, 0.5f), 4.0);
   }
   if (std::isfinite(c.depth_m))
     s.expected_radius_px = std::min<double>(coc_radius_px(s.lens, c.depth_m, w), c.pattern.max_radius_px());
