@@ -33,6 +33,8 @@ nlohmann::json cost_json(int components, int kernel_radius_px, int channels) {
 }
 
 void kernels(const KernelsOptions& o) {
+  check_writable_file(o.out_path);
+  if (o.plot) check_writable_dir(o.plots_dir);
   nlohmann::json entries = nlohmann::json::array();
   fmt::print("circular separable kernels, disc radius {} px\n", o.radius_px);
   fmt::print("{:>5} {:>10} {:>10} {:>10} {:>8} {:>10} {:>22}\n", "comp", "passband", "stopband", "published", "R px",

@@ -26,6 +26,7 @@ double paper_printed_mb(const MemoryOptions& o, LayerPrecision precision, int sc
 }
 
 void memory(const MemoryOptions& o) {
+  check_writable_file(o.out_path);
   vk::Context ctx(o.device);
   nlohmann::json rows = nlohmann::json::array();
   const GatherPattern pattern{o.size_n, 2};

@@ -1,6 +1,7 @@
 // bokehbench: benchmarks and checks bokeh depth-of-field filters (see README.md).
 #include <csignal>
 #include <exception>
+#include <new>
 
 #include <fmt/format.h>
 
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   bokeh::add_memory_command(app);
   bokeh::add_buffers_command(app);
   bokeh::add_render_command(app);
+  bokeh::add_stability_command(app);
   bokeh::add_devices_command(app);
   bokeh::add_compare_command(app);
   bokeh::add_selftest_compare_command(app);
@@ -24,6 +26,10 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const bokeh::ExitStatus& status) {
     return status.code;
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "bokehbench: error: out of host memory (std::bad_alloc): this configuration needs more memory "
+                       "than the machine has; lower the resolution or gather size\n");
+    return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "bokehbench: error: {}\n", e.what());
     return 1;

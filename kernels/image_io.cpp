@@ -4,19 +4,49 @@
 #include <stdexcept>
 
 #include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imageio.h>
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <fmt/format.h>
 
 namespace bokeh {
 
-Image read_image(const std::string& path, int channels) {
+ImageFileInfo read_image_info(const std::string& path) {
+  auto input = OIIO::ImageInput::open(path);
+  if (!input) throw std::runtime_error(fmt::format("cannot read image '{}': {}", path, OIIO::geterror()));
+  const OIIO::ImageSpec& spec = input->spec();
+  ImageFileInfo info;
+  info.width = spec.width;
+  info.height = spec.height;
+  info.channels = spec.nchannels;
+  info.pixel_type = spec.format.c_str();
+  info.is_float = spec.format.is_floating_point();
+  return info;
+}
+
+void check_image_extension(const std::string& path) {
+  const std::string ext = OIIO::Strutil::lower(OIIO::Filesystem::extension(path));
+  if (ext != ".exr" && ext != ".png")
+    throw std::invalid_argument(fmt::format(
+        "output '{}': the extension must be .exr (linear float) or .png (tone-mapped 8-bit sRGB), not '{}'", path,
+        ext.empty() ? "(none)" : ext));
+}
+
+Image read_image(const std::string& path, int channels, const std::string& what, bool float_only) {
+  if (float_only) {
+    const ImageFileInfo info = read_image_info(path);
+    if (!info.is_float)
+      throw std::runtime_error(fmt::format(
+          "{} file '{}' stores {} values, not floats: {} must be float (e.g. EXR half or float), since integer "
+          "pixels would be read as fractions 0..1",
+          what, path, info.pixel_type, what));
+  }
   OIIO::ImageBuf buf(path);
   if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT))
-    throw std::runtime_error(fmt::format("cannot read image '{}': {}", path, buf.geterror()));
+    throw std::runtime_error(fmt::format("cannot read {} '{}': {}", what, path, buf.geterror()));
   const auto& spec = buf.spec();
   if (spec.nchannels < channels)
-    throw std::runtime_error(fmt::format("image '{}' has {} channels, need {}", path, spec.nchannels, channels));
+    throw std::runtime_error(fmt::format("{} '{}' has {} channels, need {}", what, path, spec.nchannels, channels));
   Image img(spec.width, spec.height, channels);
   OIIO::ROI roi(spec.x, spec.x + spec.width, spec.y, spec.y + spec.height, 0, 1, 0, channels);
   if (!buf.get_pixels(roi, OIIO::TypeDesc::FLOAT, img.pixels.data()))
@@ -39,8 +69,8 @@ Image tone_map_for_display(const Image& linear) {
 }
 
 void write_image(const Image& image, const std::string& path) {
-  const std::string ext = OIIO::Strutil::lower(OIIO::Filesystem::extension(path));
-  const bool linear_file = ext == ".exr" || ext == ".hdr";
+  check_image_extension(path);
+  const bool linear_file = OIIO::Strutil::lower(OIIO::Filesystem::extension(path)) == ".exr";
   const Image& src = linear_file ? image : tone_map_for_display(image);
   OIIO::ImageSpec spec(src.width, src.height, src.channels, OIIO::TypeDesc::FLOAT);
   OIIO::ImageBuf buf(spec, const_cast<float*>(src.pixels.data()));
@@ -52,8 +82,10 @@ void write_image(const Image& image, const std::string& path) {
   } else {
     to_write.set_write_format(OIIO::TypeDesc::FLOAT);
   }
-  if (!to_write.write(path))
-    throw std::runtime_error(fmt::format("cannot write image '{}': {}", path, to_write.geterror()));
+  if (!to_write.write(path)) {
+    const std::string why = to_write.geterror();
+    throw std::runtime_error(fmt::format("cannot write image '{}': {}", path, why.empty() ? OIIO::geterror() : why));
+  }
 }
 
 }  // namespace bokeh

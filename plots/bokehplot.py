@@ -1,6 +1,7 @@
 """What every bokehbench plot shares: the context line, styles taken from the results themselves
 (so a new method or precision is drawn without editing a table), saving PNG + SVG, argv."""
 import json
+import os
 import sys
 
 import matplotlib
@@ -47,8 +48,12 @@ def markers_for(values):
 
 
 def save(fig, prefix):
+    # Through a temporary name and a rename, as the results files: a run interrupted or racing another
+    # never leaves a half-written plot.
     for ext in ("png", "svg"):
-        fig.savefig(f"{prefix}.{ext}", dpi=110)
+        tmp = f"{prefix}.tmp-{os.getpid()}.{ext}"
+        fig.savefig(tmp, dpi=110, format=ext)
+        os.replace(tmp, f"{prefix}.{ext}")
     print(f"wrote {prefix}.png and {prefix}.svg")
 
 

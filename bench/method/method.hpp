@@ -96,6 +96,11 @@ struct Method {
   // What the intermediates' storage costs against exact arithmetic, relative to the largest value:
   // how far radius 0 may be from the identity and the energy from conserved (0 for f32 storage).
   std::function<double(const FilterOptions&)> storage_tolerance;
+  // The largest |colour| this configuration keeps finite and unsaturated for an isolated highlight
+  // (its intermediates' range over how much a pass can amplify a value); null: only f32's range bounds
+  // it. `render` warns before work when the input is brighter; `bokehbench stability` measures where
+  // each configuration actually fails, and its test holds this declaration to that.
+  std::function<double(const FilterOptions&)> input_limit;
   // Whether every source's light sums to its colour away from the borders (at a constant radius);
   // energy_note says what the method does instead when it does not.
   bool conserves_energy = true;

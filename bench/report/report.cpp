@@ -1,8 +1,10 @@
 #include "report.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <fmt/chrono.h>
@@ -182,6 +185,50 @@ nlohmann::json power_state(const vk::DeviceInfo* device) {
 void ensure_parent_dir(const std::string& path) {
   const auto parent = std::filesystem::path(path).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
+}
+
+int remove_stale_temporaries(const std::string& dir) {
+  std::error_code ec;
+  int removed = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const auto dot = name.rfind(".tmp.");
+    if (dot == std::string::npos) continue;
+    const std::string pid = name.substr(dot + 5);
+    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    if (::kill(static_cast<pid_t>(std::stol(pid)), 0) == 0 || errno != ESRCH) continue;  // still running
+    if (std::filesystem::remove(entry.path(), ec)) ++removed;
+  }
+  return removed;
+}
+
+void check_writable_dir(const std::string& dir) {
+  const std::filesystem::path folder = dir.empty() ? std::filesystem::path(".") : std::filesystem::path(dir);
+  std::error_code ec;
+  if (std::filesystem::exists(folder, ec) && !std::filesystem::is_directory(folder, ec))
+    throw std::runtime_error(fmt::format("'{}' is not a directory", folder.string()));
+  std::filesystem::create_directories(folder, ec);
+  if (ec) throw std::runtime_error(fmt::format("cannot create directory '{}': {}", folder.string(), ec.message()));
+  // Permissions alone do not tell (root, read-only mounts, /proc): create and remove a file.
+  const std::filesystem::path probe = folder / fmt::format(".bokehbench-write-probe-{}", ::getpid());
+  {
+    std::ofstream out(probe);
+    if (!out)
+      throw std::runtime_error(fmt::format("cannot write into directory '{}': {}", folder.string(), std::strerror(errno)));
+  }
+  std::filesystem::remove(probe, ec);
+}
+
+void check_writable_file(const std::string& path) {
+  std::error_code ec;
+  if (path.empty()) throw std::runtime_error("an output path is empty");
+  if (std::filesystem::is_directory(path, ec))
+    throw std::runtime_error(fmt::format("output '{}' is a directory, not a file", path));
+  try {
+    check_writable_dir(std::filesystem::path(path).parent_path().string());
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(fmt::format("cannot write output '{}': {}", path, e.what()));
+  }
 }
 
 void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix) {

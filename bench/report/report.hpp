@@ -32,8 +32,18 @@ void write_results(const std::string& path, const std::string& schema_name, cons
 // file or the new one, never a part (the temporary's name is unique to this process).
 void write_text_atomically(const std::string& path, const std::string& text);
 
+// Removes the temporaries write_text_atomically left in `dir` when a process died mid-write (SIGKILL):
+// files named *.tmp.PID whose process no longer runs. Returns how many were removed.
+int remove_stale_temporaries(const std::string& dir);
+
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);
+
+// Before any work: throws std::runtime_error naming the path unless a file can be written there
+// (it is not a directory, its folder exists or can be created, and a file can be created in it).
+void check_writable_file(const std::string& path);
+// The same for a folder that files will be written into (created if missing).
+void check_writable_dir(const std::string& dir);
 
 // Runs plots/<script> with Debian's python3 (which has matplotlib): script JSON OUT_PREFIX.
 // Throws if it fails; the results file is already written by then.

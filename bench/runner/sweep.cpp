@@ -208,8 +208,6 @@ nlohmann::json distribution_json(const runner::Distribution& d) {
           {"max", d.max},       {"mean", d.mean}, {"stddev", d.stddev}};
 }
 
-std::string mib(double bytes) { return fmt::format("{:.1f} MiB", bytes / (1024.0 * 1024.0)); }
-
 std::string duration_text(double s) {
   if (s < 90) return fmt::format("{:.0f} s", s);
   return fmt::format("{}m{:02d}s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
@@ -363,6 +361,10 @@ nlohmann::json methods_json(const std::vector<SweepPoint>& points) {
 
 nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSettings& s) {
   const auto wall_start = std::chrono::steady_clock::now();
+  // Where the results go is checked before anything is measured.
+  check_writable_dir(s.out_dir);
+  remove_stale_temporaries(s.out_dir);
+  if (s.plot && !s.plot_script.empty()) check_writable_dir(s.plots_dir);
   const int threads = s.cpu_threads > 0 ? s.cpu_threads : default_cpu_threads();
   const bool any_gpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "gpu"; });
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
@@ -393,23 +395,12 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
       std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
       for (auto& pass : m.work(p.options, w, h)) work.push_back(std::move(pass));
       info[i].work = work_json(work, static_cast<double>(w) * h);
-      if (std::string why = m.unsupported ? m.unsupported(p.options, w, h) : ""; !why.empty()) {
-        skip[i] = why;
-        continue;
-      }
-      if (p.backend == "gpu") {
-        if (std::string missing = ctx->unmet(m.needs(p.options)); !missing.empty()) {
-          skip[i] = fmt::format("{} needs {}, which {} lacks", m.name, missing, ctx->info().name);
-          continue;
-        }
-        const MemoryUse use = m.gpu_memory(p.options, w, h, &*ctx);
-        info[i].memory = {{"bytes", use.bytes}, {"from_driver", use.from_driver}, {"details", use.details}};
-      } else {
-        info[i].memory = {{"bytes", m.cpu_memory_bytes(p.options, w, h)}, {"from_driver", false}};
-      }
-      const double bytes = info[i].memory["bytes"].get<double>();
-      if (s.max_buffer_mb > 0 && bytes > s.max_buffer_mb * 1024 * 1024)
-        skip[i] = fmt::format("intermediates {} over --max-buffer-mb {} (not allocated)", mib(bytes), s.max_buffer_mb);
+      // Device features and limits, memory budget, host memory: known before anything is allocated.
+      FramePlan plan;
+      skip[i] = plan_frame(p.backend == "gpu" ? &*ctx : nullptr, m, p.options, w, h, s.max_buffer_mb, plan);
+      const MemoryUse& use = plan.intermediates;
+      if (plan.sized) info[i].memory = {{"bytes", use.bytes}, {"from_driver", use.from_driver}};
+      if (plan.sized && p.backend == "gpu") info[i].memory["details"] = use.details;
     } catch (const std::exception& e) {
       skip[i] = e.what();
     }
@@ -586,7 +577,14 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const bool complete = record.status == "complete";
   if (s.derive) s.derive(doc);
   // gbench's own statistics and names, for compare.py.
-  write_text_atomically(complete ? gbench_path : gbench_partial, gbench_json(s.name, points, record));
+  // Nothing measured yet (interrupted during the first visit, or every point skipped): gbench would
+  // write only "Failed to match any benchmarks", so write an empty but valid document instead.
+  const bool any_samples = std::any_of(record.points.begin(), record.points.end(),
+                                      [](const runner::PointRecord& r) { return !r.samples.empty(); });
+  const std::string gbench =
+      any_samples ? gbench_json(s.name, points, record)
+                  : nlohmann::json({{"context", context}, {"benchmarks", nlohmann::json::array()}}).dump(2) + "\n";
+  write_text_atomically(complete ? gbench_path : gbench_partial, gbench);
   if (!complete) {
     write_results(partial_path, "bokehbench." + s.name, context, doc);
     throw std::runtime_error(fmt::format("interrupted after {} rounds: what was measured is in {} (earlier complete "

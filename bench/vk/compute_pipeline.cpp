@@ -84,10 +84,13 @@ void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, 
   ++ctx_.commands_recorded;
   vkCmdDispatch(cmd, (invocations_x + local_size_x_ - 1) / local_size_x_,
                 (invocations_y + local_size_y_ - 1) / local_size_y_, 1);
+  // The next pass, or a vkCmdFillBuffer that resets a buffer for the next frame of a batch (which must
+  // wait for this pass's reads too: the synchronization layer's write-after-read hazard).
   VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
   barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier,
+  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier,
                        0, nullptr, 0, nullptr);
 }
 

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "memory.hpp"  // MemoryBlocks, owned here
 #include "vk_check.hpp"
 
 namespace bokeh::vk {
@@ -208,7 +209,6 @@ Context::Context(const std::string& selector, const DeviceRequirements& wanted) 
   vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
 
   VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-  pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pool_info.queueFamilyIndex = queue_family_;
   VkCommandPool pool = VK_NULL_HANDLE;
   VK_CHECK(vkCreateCommandPool(device_, &pool_info, nullptr, &pool));
@@ -231,7 +231,7 @@ Context::~Context() {
 }
 
 void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record) {
-  VK_CHECK(vkResetCommandBuffer(command_buffer_, 0));
+  VK_CHECK(vkResetCommandPool(device_, command_pool_, 0));  // its one buffer: cheaper than a per-buffer reset
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   VK_CHECK(vkBeginCommandBuffer(command_buffer_, &begin));

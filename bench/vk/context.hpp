@@ -44,6 +44,7 @@ struct DeviceRequirements {
 };
 
 struct PipelineObjects;  // pipeline_objects.hpp: layouts and pipeline shared by equal pipelines
+class MemoryBlocks;      // memory.cpp: the blocks small allocations share
 
 class Context {
  public:
@@ -77,11 +78,15 @@ class Context {
   std::uint32_t find_memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted,
                                  VkMemoryPropertyFlags fallback) const;
 
+  // Where small buffers and images are sub-allocated (memory.hpp, Allocation).
+  MemoryBlocks& memory_blocks();
+
  private:
   Handle<VkInstance> instance_;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
   Handle<VkDevice> device_;
   std::map<std::string, std::shared_ptr<PipelineObjects>> pipeline_cache_;  // destroyed before the device
+  std::unique_ptr<MemoryBlocks> memory_blocks_;                              // likewise
   VkQueue queue_ = VK_NULL_HANDLE;
   std::uint32_t queue_family_ = 0;
   Handle<VkCommandPool> command_pool_;

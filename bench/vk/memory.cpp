@@ -1,6 +1,8 @@
 #include "memory.hpp"
 
 #include <cstring>
+#include <iterator>
+#include <utility>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -11,14 +13,17 @@ namespace bokeh::vk {
 
 namespace {
 
-Handle<VkDeviceMemory> allocate(Context& ctx, const VkMemoryRequirements& req, VkMemoryPropertyFlags wanted,
-                                VkMemoryPropertyFlags fallback) {
+Handle<VkDeviceMemory> allocate_memory(Context& ctx, VkDeviceSize bytes, std::uint32_t memory_type) {
   VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  info.allocationSize = req.size;
-  info.memoryTypeIndex = ctx.find_memory_type(req.memoryTypeBits, wanted, fallback);
+  info.allocationSize = bytes;
+  info.memoryTypeIndex = memory_type;
   VkDeviceMemory memory = VK_NULL_HANDLE;
   VK_CHECK(vkAllocateMemory(ctx.device(), &info, nullptr, &memory));
   return {memory, [d = ctx.device()](VkDeviceMemory m) { vkFreeMemory(d, m, nullptr); }};
+}
+
+VkDeviceSize align_up(VkDeviceSize value, VkDeviceSize alignment) {
+  return alignment > 1 ? (value + alignment - 1) / alignment * alignment : value;
 }
 
 VkImageCreateInfo image_3d_info(VkFormat format, std::uint32_t width, std::uint32_t height, std::uint32_t depth) {
@@ -69,6 +74,90 @@ Handle<VkImage> create_image(Context& ctx, const VkImageCreateInfo& info) {
 
 }  // namespace
 
+MemoryBlocks::Range MemoryBlocks::allocate(const VkMemoryRequirements& req, std::uint32_t memory_type,
+                                           Allocation::Kind kind, bool map) {
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    for (auto& block : blocks_) {
+      if (block->memory_type != memory_type || block->kind != kind) continue;
+      for (auto it = block->free.begin(); it != block->free.end(); ++it) {
+        const VkDeviceSize start = align_up(it->first, req.alignment), end = it->first + it->second;
+        if (start + req.size > end) continue;
+        const VkDeviceSize before = start - it->first, after = end - (start + req.size);
+        block->free.erase(it);
+        if (before > 0) block->free[start - before] = before;
+        if (after > 0) block->free[start + req.size] = after;
+        // One memory type can be both device-local and host-visible (lavapipe): map on first need.
+        if (map && !block->mapped) VK_CHECK(vkMapMemory(ctx_.device(), block->memory, 0, VK_WHOLE_SIZE, 0, &block->mapped));
+        return {block->memory, start, block->mapped ? static_cast<char*>(block->mapped) + start : nullptr};
+      }
+    }
+    auto block = std::make_unique<Block>();
+    block->memory = allocate_memory(ctx_, Allocation::kBlockBytes, memory_type);
+    block->memory_type = memory_type;
+    block->kind = kind;
+    block->free[0] = Allocation::kBlockBytes;
+    if (map) VK_CHECK(vkMapMemory(ctx_.device(), block->memory, 0, VK_WHOLE_SIZE, 0, &block->mapped));
+    blocks_.push_back(std::move(block));
+  }
+  throw std::logic_error("MemoryBlocks: a small request did not fit a new block");
+}
+
+void MemoryBlocks::release(VkDeviceMemory memory, VkDeviceSize offset, VkDeviceSize size) {
+  for (auto& block : blocks_) {
+    if (block->memory.get() != memory) continue;
+    auto next = block->free.emplace(offset, size).first;
+    if (auto after = std::next(next); after != block->free.end() && next->first + next->second == after->first) {
+      next->second += after->second;
+      block->free.erase(after);
+    }
+    if (next != block->free.begin())
+      if (auto before = std::prev(next); before->first + before->second == next->first) {
+        before->second += next->second;
+        block->free.erase(next);
+      }
+    return;
+  }
+}
+
+MemoryBlocks& Context::memory_blocks() {
+  if (!memory_blocks_) memory_blocks_ = std::make_unique<MemoryBlocks>(*this);
+  return *memory_blocks_;
+}
+
+Allocation::Allocation(Context& ctx, const VkMemoryRequirements& req, std::uint32_t memory_type, Kind kind, bool map)
+    : size_(req.size) {
+  if (req.size <= kMaxSubAllocation) {
+    blocks_ = &ctx.memory_blocks();
+    const MemoryBlocks::Range range = blocks_->allocate(req, memory_type, kind, map);
+    memory_ = range.memory, offset_ = range.offset, mapped_ = range.mapped;
+    return;
+  }
+  own_ = allocate_memory(ctx, req.size, memory_type);
+  memory_ = own_;
+  if (map) VK_CHECK(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+}
+
+Allocation& Allocation::operator=(Allocation&& o) noexcept {
+  if (this != &o) {
+    reset();
+    blocks_ = std::exchange(o.blocks_, nullptr);
+    own_ = std::move(o.own_);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    offset_ = std::exchange(o.offset_, 0);
+    size_ = std::exchange(o.size_, 0);
+    mapped_ = std::exchange(o.mapped_, nullptr);
+  }
+  return *this;
+}
+
+void Allocation::reset() {
+  if (blocks_ && memory_ != VK_NULL_HANDLE) blocks_->release(memory_, offset_, size_);
+  own_.reset();  // vkFreeMemory unmaps it
+  blocks_ = nullptr;
+  memory_ = VK_NULL_HANDLE;
+  mapped_ = nullptr;
+}
+
 Buffer::Buffer(Context& ctx, VkDeviceSize bytes, VkBufferUsageFlags usage, Where where) : bytes_(bytes) {
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   info.size = bytes;
@@ -82,11 +171,12 @@ Buffer::Buffer(Context& ctx, VkDeviceSize bytes, VkBufferUsageFlags usage, Where
   vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
   allocated_bytes_ = req.size;
   const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  memory_ = where == Where::host
-                ? allocate(ctx, req, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, host)
-                : allocate(ctx, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
-  VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
-  if (where == Where::host) VK_CHECK(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  const std::uint32_t type = where == Where::host
+                                 ? ctx.find_memory_type(req.memoryTypeBits, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, host)
+                                 : ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  memory_ = Allocation(ctx, req, type, Allocation::Kind::buffer, where == Where::host);
+  VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_.memory(), memory_.offset()));
+  mapped_ = memory_.mapped();
 }
 
 Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what) {
@@ -127,8 +217,9 @@ StorageImage3D::StorageImage3D(Context& ctx, VkFormat format, std::uint32_t widt
   VkMemoryRequirements req{};
   vkGetImageMemoryRequirements(ctx.device(), image_, &req);
   allocated_bytes_ = req.size;
-  memory_ = allocate(ctx, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
-  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
+  memory_ = Allocation(ctx, req, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0),
+                       Allocation::Kind::image, false);
+  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_.memory(), memory_.offset()));
 
   VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   view_info.image = image_;
@@ -159,8 +250,9 @@ ColorTarget::ColorTarget(Context& ctx, VkFormat format, std::uint32_t width, std
   VkMemoryRequirements req{};
   vkGetImageMemoryRequirements(ctx.device(), image_, &req);
   allocated_bytes_ = req.size;
-  memory_ = allocate(ctx, req, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
-  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
+  memory_ = Allocation(ctx, req, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0),
+                       Allocation::Kind::image, false);
+  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_.memory(), memory_.offset()));
 
   VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   view_info.image = image_;

@@ -1,6 +1,9 @@
 #pragma once
 // Device memory for buffers and storage images, and host transfers through a staging buffer.
 #include <cstdint>
+#include <map>
+#include <memory>
+#include <vector>
 
 #include <vulkan/vulkan.h>
 
@@ -8,6 +11,63 @@
 #include "handle.hpp"
 
 namespace bokeh::vk {
+
+class MemoryBlocks;
+
+// A range of device memory bound to one buffer or image. Small requests (up to kMaxSubAllocation)
+// share blocks of kBlockBytes with others of the same memory type and kind (buffers and optimal-tiling
+// images never share a block, so bufferImageGranularity never applies): a driver allows few
+// allocations and each costs (the Khronos best-practices advice). Larger ones get their own.
+class Allocation {
+ public:
+  static constexpr VkDeviceSize kMaxSubAllocation = 1 << 20, kBlockBytes = 16 << 20;
+  enum class Kind { buffer, image };
+  Allocation() = default;
+  Allocation(Context& ctx, const VkMemoryRequirements& req, std::uint32_t memory_type, Kind kind, bool map);
+  Allocation(Allocation&& o) noexcept { *this = std::move(o); }
+  Allocation& operator=(Allocation&& o) noexcept;
+  Allocation(const Allocation&) = delete;
+  Allocation& operator=(const Allocation&) = delete;
+  ~Allocation() { reset(); }
+  void reset();
+
+  VkDeviceMemory memory() const { return memory_; }
+  VkDeviceSize offset() const { return offset_; }
+  void* mapped() const { return mapped_; }  // host-visible requests only
+
+ private:
+  MemoryBlocks* blocks_ = nullptr;  // sub-allocated: the blocks to give the range back to
+  Handle<VkDeviceMemory> own_;      // or memory of its own
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  VkDeviceSize offset_ = 0, size_ = 0;
+  void* mapped_ = nullptr;
+};
+
+// The blocks small allocations share, per memory type and kind: first fit, neighbours merged on
+// release. Owned by the Context (Context::memory_blocks()); every Allocation dies before it.
+class MemoryBlocks {
+ public:
+  explicit MemoryBlocks(Context& ctx) : ctx_(ctx) {}
+  struct Range {
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VkDeviceSize offset = 0;
+    void* mapped = nullptr;
+  };
+  Range allocate(const VkMemoryRequirements& req, std::uint32_t memory_type, Allocation::Kind kind, bool map);
+  void release(VkDeviceMemory memory, VkDeviceSize offset, VkDeviceSize size);
+  std::size_t block_count() const { return blocks_.size(); }
+
+ private:
+  struct Block {
+    Handle<VkDeviceMemory> memory;
+    std::uint32_t memory_type = 0;
+    Allocation::Kind kind = Allocation::Kind::buffer;
+    void* mapped = nullptr;
+    std::map<VkDeviceSize, VkDeviceSize> free;  // offset -> bytes
+  };
+  Context& ctx_;
+  std::vector<std::unique_ptr<Block>> blocks_;
+};
 
 class Buffer {
  public:
@@ -21,7 +81,7 @@ class Buffer {
 
  private:
   // Members die in reverse order: the buffer before the memory bound to it.
-  Handle<VkDeviceMemory> memory_;
+  Allocation memory_;
   Handle<VkBuffer> buffer_;
   VkDeviceSize bytes_ = 0, allocated_bytes_ = 0;
   void* mapped_ = nullptr;
@@ -42,7 +102,7 @@ class StorageImage3D {
   VkDeviceSize allocated_bytes() const { return allocated_bytes_; }
 
  private:
-  Handle<VkDeviceMemory> memory_;  // declared first: destroyed after the image and view bound to it
+  Allocation memory_;  // declared first: freed after the image and view bound to it
   Handle<VkImage> image_;
   Handle<VkImageView> view_;
   VkDeviceSize allocated_bytes_ = 0;
@@ -63,7 +123,7 @@ class ColorTarget {
   VkDeviceSize allocated_bytes() const { return allocated_bytes_; }
 
  private:
-  Handle<VkDeviceMemory> memory_;  // declared first: destroyed after the image and view bound to it
+  Allocation memory_;  // declared first: freed after the image and view bound to it
   Handle<VkImage> image_;
   Handle<VkImageView> view_;
   VkFormat format_;

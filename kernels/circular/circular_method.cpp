@@ -1,6 +1,8 @@
 // circular1 .. circular6: Garcia's circular separable convolution depth of field (GDC 2018) with
 // 1 to 6 complex components, near/far split, intermediates in f32, f16 or bracketed 10-bit.
 #include <algorithm>
+#include <complex>
+#include <limits>
 #include <string>
 
 #include "circular_gpu.hpp"
@@ -93,6 +95,22 @@ Method circular_method(int components) {
   };
   m.gpu_tolerance = [storage](const FilterOptions& o) { return 1e-5 + storage(o, 2); };
   m.storage_tolerance = [storage](const FilterOptions& o) { return storage(o, 1); };
+  // The horizontal pass stores sum_i tap_i J (complex) per component: |Re|, |Im| <= S J with
+  // S = max_c sum_i (|Re tap_i| + |Im tap_i|) (about the tap count: S grows with the radius). f16
+  // intermediates overflow at 65504 / S; f32 and bracketed10 (whose vertical pass rebuilds I in f32)
+  // at f32's largest value over the vertical pass's second sum, 2 S^2.
+  m.input_limit = [components](const FilterOptions& o) {
+    const double disc = std::max(1.0f, o.pattern.max_radius_px());
+    double s = 0;
+    for (int c : {components, o.integer("near_components")})
+      for (const auto& taps : make_circular_kernel_for_disc(c, disc).taps) {
+        double sum = 0;
+        for (std::complex<float> t : taps) sum += std::abs(t.real()) + std::abs(t.imag());
+        s = std::max(s, sum);
+      }
+    if (intermediate_precision_from_string(o.precision) == IntermediatePrecision::f16) return 65504.0 / s;
+    return static_cast<double>(std::numeric_limits<float>::max()) / (2 * s * s);
+  };
   m.energy_note = "the kernels sum to one; a constant-radius image is one convolution";
   return m;
 }

@@ -8,7 +8,20 @@
 
 namespace bokeh {
 
-namespace {
+void check_color(const Image& color) {
+  if (color.channels < 3) throw std::invalid_argument("colour needs at least three channels");
+  for (int y = 0; y < color.height; ++y)
+    for (int x = 0; x < color.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float v = color.px(x, y)[c];
+        if (!std::isfinite(v))
+          throw std::invalid_argument(fmt::format(
+              "colour at pixel ({}, {}) channel {} is {}: colours must be finite (a NaN or Inf would spread over "
+              "its whole disc)",
+              x, y, "RGB"[c], v));
+      }
+}
+
 void check_depth(const Image& depth_m) {
   if (depth_m.channels != 1) throw std::invalid_argument("depth must have exactly one channel");
   for (int y = 0; y < depth_m.height; ++y)
@@ -19,7 +32,6 @@ void check_depth(const Image& depth_m) {
             fmt::format("depth at pixel ({}, {}) is {}: depths must be finite and > 0 metres", x, y, d));
     }
 }
-}  // namespace
 
 Image coc_radius_image(const Image& depth_m, const Lens& lens, float max_radius_px) {
   validate(lens);
@@ -58,6 +70,8 @@ double max_defocus_ratio(const Image& depth_m, const Lens& lens) {
 }
 
 Lens with_max_coc_radius(Lens lens, const Image& depth_m, double radius_px) {
+  if (!std::isfinite(radius_px) || radius_px < 0.0)
+    throw std::invalid_argument(fmt::format("the largest CoC radius to fit must be finite and >= 0 px, got {}", radius_px));
   const double ratio = max_defocus_ratio(depth_m, lens);
   if (ratio <= 0.0 || radius_px <= 0.0) {
     lens.f_stop = 1e9;  // everything in focus or no blur wanted: a pinhole

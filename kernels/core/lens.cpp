@@ -1,6 +1,8 @@
 #include "lens.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <fstream>
 #include <stdexcept>
 
@@ -33,10 +35,21 @@ Lens load_lens_json(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(fmt::format("lens file '{}' is not valid JSON: {}", path, e.what()));
   }
+  if (!j.is_object())
+    throw std::runtime_error(fmt::format("lens file '{}' must hold a JSON object, not {}", path, j.type_name()));
+  static const char* kFields[] = {"focal_length_mm", "f_stop", "sensor_width_mm", "focus_distance_m", "coc_model"};
+  for (const auto& [key, value] : j.items())
+    if (std::find(std::begin(kFields), std::end(kFields), key) == std::end(kFields))
+      throw std::runtime_error(fmt::format(
+          "lens file '{}': unknown field '{}' (expected focal_length_mm, f_stop, sensor_width_mm, focus_distance_m, "
+          "coc_model)",
+          path, key));
   Lens lens;
   auto number = [&](const char* key) {
     if (!j.contains(key)) throw std::runtime_error(fmt::format("lens file '{}' lacks '{}'", path, key));
-    if (!j[key].is_number()) throw std::runtime_error(fmt::format("lens file '{}': '{}' must be a number", path, key));
+    if (!j[key].is_number())
+      throw std::runtime_error(
+          fmt::format("lens file '{}': '{}' must be a number, not {} ({})", path, key, j[key].type_name(), j[key].dump()));
     return j[key].get<double>();
   };
   lens.focal_length_mm = number("focal_length_mm");
@@ -44,6 +57,10 @@ Lens load_lens_json(const std::string& path) {
   lens.sensor_width_mm = number("sensor_width_mm");
   lens.focus_distance_m = number("focus_distance_m");
   if (j.contains("coc_model")) {
+    if (!j["coc_model"].is_string())
+      throw std::runtime_error(fmt::format("lens file '{}': 'coc_model' must be a string (thin_lens or "
+                                           "focal_plane_at_f), not {} ({})",
+                                           path, j["coc_model"].type_name(), j["coc_model"].dump()));
     const auto model = j["coc_model"].get<std::string>();
     if (model == "thin_lens") lens.model = CocModel::thin_lens;
     else if (model == "focal_plane_at_f") lens.model = CocModel::focal_plane_at_f;

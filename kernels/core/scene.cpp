@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "coc.hpp"
 #include "image_io.hpp"
 
 namespace bokeh {
@@ -139,11 +140,22 @@ Scene make_scene(const std::string& name, int w, int h) {
 Scene load_scene(const std::string& color_path, const std::string& depth_path) {
   Scene s;
   s.name = color_path;
-  s.color = read_image(color_path, 3);
-  s.depth_m = read_image(depth_path, 1);
+  s.color = read_image(color_path, 3, "colour");
+  s.depth_m = read_image(depth_path, 1, "depth", /*float_only=*/true);
   if (s.color.width != s.depth_m.width || s.color.height != s.depth_m.height)
     throw std::runtime_error(fmt::format("colour '{}' is {}x{} but depth '{}' is {}x{}", color_path, s.color.width,
                                          s.color.height, depth_path, s.depth_m.width, s.depth_m.height));
+  // Before any work, with the file named: the pixel check itself names the pixel.
+  try {
+    check_color(s.color);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(fmt::format("colour file '{}': {}", color_path, e.what()));
+  }
+  try {
+    check_depth(s.depth_m);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(fmt::format("depth file '{}': {}", depth_path, e.what()));
+  }
   return s;
 }
 

@@ -29,7 +29,9 @@ Scene make_scene(const std::string& name, int width_px, int height_px);
 // The lights `points` places at this resolution (exposed so tests can check disc size and position).
 std::vector<PointLight> point_lights(int width_px, int height_px);
 
-// Loads colour (first three channels) and depth (first channel) through OpenImageIO.
+// Loads colour (first three channels) and depth (first channel) through OpenImageIO. Throws, naming
+// the file and pixel, when a colour is not finite, a depth is not finite and > 0, or the depth file
+// stores integers rather than floats (check_color, check_depth, read_image).
 Scene load_scene(const std::string& color_path, const std::string& depth_path);
 
 }  // namespace bokeh

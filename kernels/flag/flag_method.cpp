@@ -1,6 +1,8 @@
 // flag: FLAG (Moersch & Hamilton 2014), section 3.2, with reduced-precision and reduced-resolution
 // 3D buffers (section 5).
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "flag.hpp"
 #include "flag_gpu.hpp"
@@ -56,6 +58,21 @@ MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx
   return use;
 }
 
+// The CPU reference holds its 3D buffer whole up to this size; beyond it, it runs in vertical strips
+// (flag_blur_in_strips: the same result bit for bit) whose buffers stay near it, so a 8192^2 frame
+// needs ~0.3 GiB instead of 16 GiB. Bracketed precisions bracket whole rows and stay whole.
+constexpr std::uint64_t kCpuWholeBufferBytes = 256ull << 20;
+
+// Strip width in px for the CPU reference, 0 for the whole frame at once.
+int cpu_strip_px(const FilterOptions& o, int w, int h) {
+  if (o.buffer_scale != 1 || is_bracketed(layer_precision_from_string(o.precision))) return 0;
+  // Per column: the layers (3 floats each), the cropped packed input (4) and its blurred copy (3).
+  const std::uint64_t column_bytes = static_cast<std::uint64_t>(h) * (o.pattern.layers() * 12 + 16 + 12);
+  if (static_cast<std::uint64_t>(w) * column_bytes <= kCpuWholeBufferBytes) return 0;
+  const int halo = o.pattern.half() * o.pattern.spacing_px;
+  return std::max<int>(64, static_cast<int>(kCpuWholeBufferBytes / column_bytes) - 2 * halo);
+}
+
 }  // namespace
 
 void declare_flag(std::vector<Method>& methods) {
@@ -76,12 +93,18 @@ void declare_flag(std::vector<Method>& methods) {
     if (in.options.buffer_scale != 1)
       return flag_reduced_blur(in.color, in.radius_px, in.options.pattern, in.options.buffer_scale, precision,
                                in.threads);
+    if (const int strip = cpu_strip_px(in.options, in.packed.width, in.packed.height); strip > 0)
+      return flag_blur_in_strips(in.packed, in.options.pattern, precision, strip, in.threads);
     return flag_blur(in.packed, in.options.pattern, precision, in.threads);
   };
   m.make_gpu = make_flag_gpu;
   m.work = flag_work;
   m.gpu_memory = flag_gpu_memory;
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
+    if (const int strip = cpu_strip_px(o, w, h); strip > 0) {
+      const int columns = std::min(w, strip + 2 * o.pattern.half() * o.pattern.spacing_px);
+      return static_cast<std::uint64_t>(columns) * h * (o.pattern.layers() * 12 + 16 + 12);
+    }
     const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
     const auto lw = static_cast<std::uint64_t>(ceil_div(w, o.buffer_scale)), lh = static_cast<std::uint64_t>(ceil_div(h, o.buffer_scale));
     return lw * lh * low.layers() * 3 * sizeof(float);  // FlagLayers: the whole 3D buffer in f32
@@ -115,6 +138,16 @@ void declare_flag(std::vector<Method>& methods) {
       case LayerPrecision::f16: return std::ldexp(1.0, -10);
       case LayerPrecision::r11g11b10f: return std::ldexp(1.0, -5);
       default: return static_cast<double>(reduced_pattern(o.pattern, o.buffer_scale).size_n) / bracket_levels(p);
+    }
+  };
+  // An isolated highlight in focus is stored as it is (its disc's area is 1), so the layer format's
+  // largest finite value bounds it: f16 65504, r11g11b10f blue's (2 - 2^-5) 2^15 = 64512 (red and
+  // green reach 65024). f32 and the bracketed formats (offsets and scales in f32) have f32's range.
+  m.input_limit = [](const FilterOptions& o) {
+    switch (layer_precision_from_string(o.precision)) {
+      case LayerPrecision::f16: return 65504.0;
+      case LayerPrecision::r11g11b10f: return 64512.0;
+      default: return static_cast<double>(std::numeric_limits<float>::max());
     }
   };
   m.energy_note = "the same sums as naive (each source's contributions sum to its colour), up to the layers' storage";

@@ -1,4 +1,6 @@
 // hexagon: the two-pass, three-rhombus hexagonal bokeh (Need for Speed: The Run); see hexagon.hpp.
+#include <limits>
+
 #include "hexagon.hpp"
 #include "hexagon_gpu.hpp"
 #include "method.hpp"
@@ -53,6 +55,9 @@ void declare_hexagon(std::vector<Method>& methods) {
   m.gpu_tolerance = [](const FilterOptions&) { return 1e-5; };
   // f32 storage; radius 0: every weight but the pixel's own is 0 and the mean form is exact.
   m.storage_tolerance = [](const FilterOptions&) { return 0.0; };
+  // Pass 1 adds two blurs before halving them ((up + down-left) * 0.5) and pass 2 sums three rhombi:
+  // in f32 a value above a quarter of the largest float overflows there (3e38 in focus gave NaN).
+  m.input_limit = [](const FilterOptions&) { return static_cast<double>(std::numeric_limits<float>::max()) / 4; };
   m.energy_note = "each texel's light is spread over its own CoC's extent with weights summing to one, in each "
                   "pass; the near/far rule drops what it deems hidden (a background behind a sharper foreground) "
                   "and fills a blurred pixel's hidden share with the mean of what it sees";

@@ -3,12 +3,56 @@
 
 #include "flag_memory.hpp"
 #include "flag_gpu.hpp"
+#include "method.hpp"
 #include "vk/memory.hpp"
+
+#include <cstdint>
+#include <vector>
 
 namespace bokeh {
 namespace {
 
 const GatherPattern k41{41, 2};
+
+// The CPU FLAG reference runs in strips once its whole 3D buffer would pass 256 MiB: at 8192^2 it
+// holds well under 1 GiB instead of 8192 x 8192 x 21 layers x 12 B = 16 GiB.
+TEST(FlagMemory, CpuReferenceIsBoundedByStrips) {
+  const Method& flag = find_method("flag");
+  FilterOptions o = flag.defaults(k41);
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 800, 600), 800ull * 600 * 21 * 12);  // whole: 115 MiB
+  EXPECT_LT(flag.cpu_memory_bytes(o, 8192, 8192), 1ull << 30);
+  o.precision = "unorm16_bracketed";  // brackets whole rows: stays whole, and says so
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 21 * 12);
+}
+
+// Small buffers share blocks (the best-practices layer's advice); each keeps its own bytes, a freed
+// range is reused, and a buffer over the sub-allocation limit gets memory of its own.
+TEST(DeviceMemory, SmallBuffersShareBlocksAndKeepTheirOwnData) {
+  vk::Context ctx;
+  const VkBufferUsageFlags usage =
+      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  {
+    std::vector<vk::Buffer> buffers;
+    for (int i = 0; i < 64; ++i) {
+      buffers.emplace_back(ctx, 16 + 4 * i, usage);
+      std::vector<std::uint32_t> words((16 + 4 * i) / 4, static_cast<std::uint32_t>(i));
+      vk::upload(ctx, buffers.back(), words.data(), words.size() * 4);
+    }
+    const std::size_t blocks = ctx.memory_blocks().block_count();
+    EXPECT_LE(blocks, 2u) << "64 small buffers (and their staging copies) in at most one device and one host block";
+    for (int i = 0; i < 64; ++i) {
+      std::vector<std::uint32_t> words((16 + 4 * i) / 4, 0xdeadbeef);
+      vk::download(ctx, buffers[i], words.data(), words.size() * 4);
+      for (std::uint32_t w : words) ASSERT_EQ(w, static_cast<std::uint32_t>(i)) << "buffer " << i;
+    }
+    vk::Buffer large(ctx, vk::Allocation::kMaxSubAllocation + 1, usage);
+    EXPECT_EQ(ctx.memory_blocks().block_count(), blocks) << "a large buffer has memory of its own";
+  }
+  const std::size_t blocks = ctx.memory_blocks().block_count();
+  std::vector<vk::Buffer> again;
+  for (int i = 0; i < 64; ++i) again.emplace_back(ctx, vk::Allocation::kMaxSubAllocation / 8, usage);
+  EXPECT_EQ(ctx.memory_blocks().block_count(), blocks) << "freed ranges merge and are reused";
+}
 
 TEST(FlagMemory, PaperConventionReproducesPrintedFigures) {
   // Section 3.2.4: 332 MB at 1080p, 41x41, RGBA16F; section 5: 42 MB half, 5.2 MB quarter (MiB).
