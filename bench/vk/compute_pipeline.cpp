@@ -74,24 +74,49 @@ void ComputePipeline::bind(std::uint32_t binding, const Buffer& buffer) { set_.b
 
 void ComputePipeline::bind(std::uint32_t binding, const StorageImage3D& image) { set_.bind(binding, image); }
 
-void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,
-                               std::uint32_t invocations_y) const {
+void ComputePipeline::bind(std::uint32_t binding, const TexelView& view) { set_.bind(binding, view); }
+
+void ComputePipeline::bind_and_push(VkCommandBuffer cmd, const void* push_constants) const {
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, shared_->pipeline);
   const VkDescriptorSet set = set_.get();
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, shared_->layout, 0, 1, &set, 0, nullptr);
   if (push_constant_bytes_ > 0)
     vkCmdPushConstants(cmd, shared_->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes_, push_constants);
-  ++ctx_.commands_recorded;
-  vkCmdDispatch(cmd, (invocations_x + local_size_x_ - 1) / local_size_x_,
-                (invocations_y + local_size_y_ - 1) / local_size_y_, 1);
-  // The next pass, or a vkCmdFillBuffer that resets a buffer for the next frame of a batch (which must
-  // wait for this pass's reads too: the synchronization layer's write-after-read hazard).
+}
+
+// The next pass may read this pass's writes as data or as indirect dispatch sizes; a
+// vkCmdFillBuffer that resets a buffer for the next frame of a batch must wait for this pass's reads
+// too (the synchronization layer's write-after-read hazard).
+void ComputePipeline::barrier_after(VkCommandBuffer cmd) const {
   VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
   barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                          VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
   vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier,
-                       0, nullptr, 0, nullptr);
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT |
+                           VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       0, 1, &barrier, 0, nullptr, 0, nullptr);
+}
+
+VkDispatchIndirectCommand ComputePipeline::groups(std::uint32_t invocations_x, std::uint32_t invocations_y) const {
+  return {(invocations_x + local_size_x_ - 1) / local_size_x_, (invocations_y + local_size_y_ - 1) / local_size_y_, 1};
+}
+
+void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,
+                               std::uint32_t invocations_y) const {
+  bind_and_push(cmd, push_constants);
+  ++ctx_.commands_recorded;
+  const VkDispatchIndirectCommand g = groups(invocations_x, invocations_y);
+  vkCmdDispatch(cmd, g.x, g.y, g.z);
+  barrier_after(cmd);
+}
+
+void ComputePipeline::dispatch_indirect(VkCommandBuffer cmd, const void* push_constants, const Buffer& args,
+                                        VkDeviceSize offset) const {
+  bind_and_push(cmd, push_constants);
+  ++ctx_.commands_recorded;
+  vkCmdDispatchIndirect(cmd, args.get(), offset);
+  barrier_after(cmd);
 }
 
 }  // namespace bokeh::vk

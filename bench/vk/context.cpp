@@ -68,6 +68,8 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   info.device_id = p.deviceID;
   info.timestamp_period_ns = p.limits.timestampPeriod;
   info.max_storage_buffer_range_bytes = p.limits.maxStorageBufferRange;
+  info.max_uniform_buffer_range_bytes = p.limits.maxUniformBufferRange;
+  info.max_texel_buffer_elements = p.limits.maxTexelBufferElements;
   info.max_image_dimension_3d = p.limits.maxImageDimension3D;
 
   std::uint32_t family_count = 0;

@@ -25,6 +25,8 @@ struct DeviceInfo {
   double timestamp_period_ns = 0;
   std::uint32_t timestamp_valid_bits = 0;
   std::uint64_t max_storage_buffer_range_bytes = 0;
+  std::uint64_t max_uniform_buffer_range_bytes = 0;
+  std::uint64_t max_texel_buffer_elements = 0;
   std::uint32_t max_image_dimension_3d = 0;
   std::uint64_t device_local_heap_bytes = 0;
   bool pipeline_statistics = false;  // pipelineStatisticsQuery (enabled when present)

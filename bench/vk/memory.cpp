@@ -179,13 +179,42 @@ Buffer::Buffer(Context& ctx, VkDeviceSize bytes, VkBufferUsageFlags usage, Where
   mapped_ = memory_.mapped();
 }
 
-Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what) {
+Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what, VkBufferUsageFlags extra_usage) {
   const auto limit = ctx.info().max_storage_buffer_range_bytes;
   if (bytes > limit)
     throw std::runtime_error(fmt::format("{} needs {:.1f} MiB, over the device's maxStorageBufferRange of {:.1f} MiB",
                                          what, bytes / 1048576.0, limit / 1048576.0));
   return Buffer(ctx, bytes,
-                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                    extra_usage);
+}
+
+TexelView::TexelView(Context& ctx, const Buffer& buffer, VkFormat format, std::uint32_t texel_bytes, const char* what) {
+  const std::uint64_t texels = buffer.bytes() / texel_bytes, limit = ctx.info().max_texel_buffer_elements;
+  if (texels > limit)
+    throw std::runtime_error(
+        fmt::format("{} has {} texels, over the device's maxTexelBufferElements of {}", what, texels, limit));
+  VkFormatProperties props{};
+  vkGetPhysicalDeviceFormatProperties(ctx.physical_device(), format, &props);
+  if (!(props.bufferFeatures & VK_FORMAT_FEATURE_UNIFORM_TEXEL_BUFFER_BIT))
+    throw std::runtime_error(fmt::format("{}: the device cannot read format {} as a uniform texel buffer", what,
+                                         static_cast<int>(format)));
+  VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  info.buffer = buffer.get();
+  info.format = format;
+  info.offset = 0;
+  info.range = texels * texel_bytes;
+  VkBufferView view = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateBufferView(ctx.device(), &info, nullptr, &view));
+  view_ = Handle<VkBufferView>(view, [d = ctx.device()](VkBufferView v) { vkDestroyBufferView(d, v, nullptr); });
+}
+
+Buffer make_uniform_buffer(Context& ctx, VkDeviceSize bytes, const char* what) {
+  const auto limit = ctx.info().max_uniform_buffer_range_bytes;
+  if (bytes > limit)
+    throw std::runtime_error(fmt::format("{} needs {} bytes, over the device's maxUniformBufferRange of {} bytes", what,
+                                         bytes, limit));
+  return Buffer(ctx, bytes, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT);
 }
 
 void upload(Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes) {

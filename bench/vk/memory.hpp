@@ -88,7 +88,25 @@ class Buffer {
 };
 
 // A storage buffer: checks the device's maxStorageBufferRange (128 MiB on lavapipe) up front.
-Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what);
+// extra_usage: e.g. VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT to read it through a TexelView, or
+// VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT for dispatch sizes a shader writes.
+Buffer make_storage_buffer(Context& ctx, VkDeviceSize bytes, const char* what, VkBufferUsageFlags extra_usage = 0);
+// A uniform buffer (small, read-only constants such as kernel taps): checks maxUniformBufferRange
+// (64 KiB on lavapipe) up front.
+Buffer make_uniform_buffer(Context& ctx, VkDeviceSize bytes, const char* what);
+
+// A buffer (made with VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT) read as a uniform texel buffer
+// (samplerBuffer, texelFetch) of `format`, texel_bytes per texel. lavapipe fetches texels with vector
+// gathers, while a storage-buffer load in non-uniform control flow is a loop of per-lane scalar
+// loads. Checks maxTexelBufferElements and the format's uniform-texel-buffer support.
+class TexelView {
+ public:
+  TexelView(Context& ctx, const Buffer& buffer, VkFormat format, std::uint32_t texel_bytes, const char* what);
+  VkBufferView get() const { return view_; }
+
+ private:
+  Handle<VkBufferView> view_;
+};
 
 void upload(Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes);
 void download(Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes);

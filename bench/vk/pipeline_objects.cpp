@@ -1,5 +1,9 @@
 #include "pipeline_objects.hpp"
 
+#include <stdexcept>
+
+#include <fmt/format.h>
+
 #include "vk_check.hpp"
 
 namespace bokeh::vk {
@@ -37,7 +41,7 @@ Handle<VkShaderModule> create_shader_module(VkDevice device, std::span<const std
 }
 
 DescriptorSet::DescriptorSet(Context& ctx, VkDescriptorSetLayout layout, const std::vector<VkDescriptorType>& bindings)
-    : ctx_(ctx) {
+    : ctx_(ctx), bindings_(bindings) {
   const VkDevice device = ctx.device();
   std::vector<VkDescriptorPoolSize> sizes;
   for (VkDescriptorType type : bindings) sizes.push_back({type, 1});
@@ -57,7 +61,7 @@ DescriptorSet::DescriptorSet(Context& ctx, VkDescriptorSetLayout layout, const s
 }
 
 void DescriptorSet::write(std::uint32_t binding, VkDescriptorType type, const VkDescriptorBufferInfo* buffer,
-                          const VkDescriptorImageInfo* image) {
+                          const VkDescriptorImageInfo* image, const VkBufferView* texel) {
   VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
   write.dstSet = set_;
   write.dstBinding = binding;
@@ -65,17 +69,26 @@ void DescriptorSet::write(std::uint32_t binding, VkDescriptorType type, const Vk
   write.descriptorType = type;
   write.pBufferInfo = buffer;
   write.pImageInfo = image;
+  write.pTexelBufferView = texel;
   vkUpdateDescriptorSets(ctx_.device(), 1, &write, 0, nullptr);
 }
 
 void DescriptorSet::bind(std::uint32_t binding, const Buffer& buffer) {
+  const VkDescriptorType type = binding < bindings_.size() ? bindings_[binding] : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  if (type != VK_DESCRIPTOR_TYPE_STORAGE_BUFFER && type != VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER)
+    throw std::logic_error(fmt::format("binding {} is not a buffer binding", binding));
   const VkDescriptorBufferInfo info{buffer.get(), 0, VK_WHOLE_SIZE};
-  write(binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, &info, nullptr);
+  write(binding, type, &info, nullptr);
 }
 
 void DescriptorSet::bind(std::uint32_t binding, const StorageImage3D& image) {
   const VkDescriptorImageInfo info{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL};
   write(binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, nullptr, &info);
+}
+
+void DescriptorSet::bind(std::uint32_t binding, const TexelView& view) {
+  const VkBufferView v = view.get();
+  write(binding, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, nullptr, nullptr, &v);
 }
 
 }  // namespace bokeh::vk

@@ -1,7 +1,7 @@
 #pragma once
 // What compute and graphics pipelines share: the objects equal pipelines share through the context's
-// cache, their layouts (storage buffers and images in binding order, push constants), shader modules,
-// and a descriptor set of their own.
+// cache, their layouts (storage and uniform buffers, uniform texel buffers and storage images in
+// binding order, push constants), shader modules, and a descriptor set of their own.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -34,15 +34,17 @@ class DescriptorSet {
  public:
   DescriptorSet(Context& ctx, VkDescriptorSetLayout layout, const std::vector<VkDescriptorType>& bindings);
 
-  void bind(std::uint32_t binding, const Buffer& buffer);
+  void bind(std::uint32_t binding, const Buffer& buffer);  // a storage or uniform buffer, as declared
   void bind(std::uint32_t binding, const StorageImage3D& image);
+  void bind(std::uint32_t binding, const TexelView& view);  // a uniform texel buffer
   VkDescriptorSet get() const { return set_; }
 
  private:
   void write(std::uint32_t binding, VkDescriptorType type, const VkDescriptorBufferInfo* buffer,
-             const VkDescriptorImageInfo* image);
+             const VkDescriptorImageInfo* image, const VkBufferView* texel = nullptr);
 
   Context& ctx_;
+  std::vector<VkDescriptorType> bindings_;
   Handle<VkDescriptorPool> pool_;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
 };

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <complex>
 #include <limits>
+#include <stdexcept>
 #include <string>
+
+#include <fmt/format.h>
 
 #include "circular_gpu.hpp"
 #include "circular_separable.hpp"
@@ -13,6 +16,8 @@ namespace bokeh::methods {
 
 namespace {
 
+std::string m_name(int components) { return "circular" + std::to_string(components); }
+
 // Both kernels blur a disc of the pattern's max radius k (N - 1) / 2: the circular filters take
 // their (fixed) kernel from the same gather-size axis as naive and FLAG, so a sweep compares them at
 // the same largest CoC; the per-pixel CoC enters through the near/far alpha w = radius / max radius.
@@ -20,24 +25,31 @@ int tap_radius(int components, const FilterOptions& o) {
   return make_circular_kernel_for_disc(components, std::max(1.0f, o.pattern.max_radius_px())).radius_px;
 }
 
+// Both fields as if present (the model cannot see the scene): an empty field's passes do no work
+// on either backend (its horizontal and, near, vertical pass dispatch nothing on the GPU; the far
+// vertical pass then only composites).
 std::vector<PassWork> circular_work(int far, const FilterOptions& o, int w, int h) {
   const double px = static_cast<double>(w) * h;
   const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
   const double component = static_cast<double>(circular_component_bytes_per_pixel(precision));
   const double box = precision == IntermediatePrecision::bracketed10 ? 8 : 0;
+  // layers: colour, depth, packed input -> both layers (the channel maxima and dispatch sizes are
+  // a few bytes).
   std::vector<PassWork> work = {{"layers", px, px * 36, px * 32}};
   for (const auto& [field, c] : {std::pair<std::string, int>{"far", far}, {"near", o.integer("near_components")}}) {
     const double taps = px * c * (2.0 * tap_radius(c, o) + 1);  // complex RGBA multiply-adds
     work.push_back({field + "_horizontal", taps, px * 16, px * (c * component + box)});
-    // Reads the intermediates and the colour (far) or the far result (near); writes the output.
-    work.push_back({field + "_vertical", taps, px * (c * component + box + 16), px * 16});
+    // Reads the intermediates and the colour and its own layer's alpha (far) or the far result
+    // (near); writes the output.
+    const double composite_in = field == "far" ? 32 : 16;
+    work.push_back({field + "_vertical", taps, px * (c * component + box + composite_in), px * 16});
   }
   return work;
 }
 
 Method circular_method(int components) {
   Method m;
-  m.name = "circular" + std::to_string(components);
+  m.name = m_name(components);
   m.description = std::to_string(components) +
                   "-component circular separable convolution (Garcia 2018): complex-Gaussian horizontal + vertical "
                   "passes on near/far layers, fixed disc of radius k(N-1)/2";
@@ -69,20 +81,36 @@ Method circular_method(int components) {
     return make_circular_gpu(frame, o, components);
   };
   m.work = [components](const FilterOptions& o, int w, int h) { return circular_work(components, o, w, h); };
-  m.gpu_memory = [components](const FilterOptions& o, int w, int h, vk::Context*) {
+  m.gpu_memory = [components](const FilterOptions& o, int w, int h, vk::Context* ctx) {
     const auto px = static_cast<std::uint64_t>(w) * h;
     const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
     const int near = o.integer("near_components");
+    const float disc = std::max(1.0f, o.pattern.max_radius_px());
+    const std::uint64_t far_kernel = circular_kernel_block_bytes(make_circular_kernel_for_disc(components, disc));
+    const std::uint64_t near_kernel = circular_kernel_block_bytes(make_circular_kernel_for_disc(near, disc));
+    // The kernels live in uniform buffers: say so before allocating when the device's are too small.
+    if (ctx && std::max(far_kernel, near_kernel) > ctx->info().max_uniform_buffer_range_bytes)
+      throw std::runtime_error(fmt::format("{}: a kernel of {} bytes exceeds {}'s maxUniformBufferRange of {} bytes "
+                                           "(a smaller max radius or fewer components fits)",
+                                           m_name(components), std::max(far_kernel, near_kernel), ctx->info().name,
+                                           ctx->info().max_uniform_buffer_range_bytes));
     const std::uint64_t inter = std::max(components, near) * px * circular_component_bytes_per_pixel(precision);
     const std::uint64_t layers = 2 * px * 16, box = precision == IntermediatePrecision::bracketed10 ? px * 8 : 0;
     MemoryUse use;
-    use.bytes = inter + layers + box;
-    use.details = {{"component_buffers_bytes", inter}, {"near_far_layers_bytes", layers}, {"box_sum_bytes", box}};
+    use.bytes = inter + layers + box + far_kernel + near_kernel;
+    use.details = {{"component_buffers_bytes", inter},
+                   {"near_far_layers_bytes", layers},
+                   {"box_sum_bytes", box},
+                   {"kernel_bytes", far_kernel + near_kernel}};
     return use;
   };
+  // The near and far RGBA layers, one convolution's intermediates (real and imaginary planes of 4
+  // channels per component, held as f32 at every precision) and its blurred RGBA output; near and far
+  // convolve one after the other.
   m.cpu_memory_bytes = [components](const FilterOptions& o, int w, int h) {
     const auto px = static_cast<std::uint64_t>(w) * h;
-    return 2 * px * 4 * sizeof(float) + std::max(components, o.integer("near_components")) * px * 8 * sizeof(float);
+    return 2 * px * 4 * sizeof(float) + std::max(components, o.integer("near_components")) * px * 8 * sizeof(float) +
+           px * 4 * sizeof(float);
   };
   // Same taps, weights and order as the CPU, so f32 differs by rounding only (measured 1.4e-6 at 6
   // components); stored f16 or 10-bit parts may round the other way on the GPU (Vulkan allows either):

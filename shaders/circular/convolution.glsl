@@ -1,5 +1,5 @@
-// Shared by circular_horizontal.comp and circular_vertical.comp: the circular separable filter
-// (Garcia, GDC 2018) of kernels/circular_separable.cpp on the GPU, see bench/gpu/circular_gpu.cpp.
+// Shared by horizontal.comp and vertical.comp: the circular separable filter (Garcia, GDC 2018) of
+// kernels/circular/circular_separable.cpp on the GPU, see kernels/circular/circular_gpu.cpp.
 // Included after common.glsl. PRECISION (a define, one SPIR-V per value) picks the intermediates:
 //   0 f32:         vec4 pair per pixel: [2 p] = Re of RGBA, [2 p + 1] = Im of RGBA          32 B
 //   1 f16:         uvec4 per pixel: packHalf2x16 of (Re.rg, Re.ba, Im.rg, Im.ba)            16 B
@@ -13,18 +13,31 @@ layout(constant_id = 0) const int COMPONENTS = 1;  // 1..6
 layout(constant_id = 1) const int RADIUS = 1;      // kernel radius R: taps at -R..R
 layout(constant_id = 2) const int LAYER = 0;       // 0 far, 1 near: which channel maxima M to use
 layout(constant_id = 3) const int OUTPUTS = 1;     // output pixels per invocation along the pass
+// How a pass loads (both are on for lavapipe, off for GPUs; circular_gpu.cpp says why):
+//   TEXEL_LOADS     its input (layer or intermediates) through uniform texel buffers (texelFetch)
+//                   instead of the storage buffers;
+//   SLIDING_WINDOW  the OUTPUTS inputs an invocation needs at a tap stay in registers and shift by
+//                   one per tap, so each tap loads one input and one kernel tap per component
+//                   instead of OUTPUTS kernel taps (more live registers).
+// Every output pixel sums its taps in the same order either way: the results are bit-identical.
+layout(constant_id = 4) const bool TEXEL_LOADS = false;
+layout(constant_id = 5) const bool SLIDING_WINDOW = false;
 
 const int TAPS = 2 * RADIUS + 1;
 const float UNORM10_MAX = 1023.0;
 
-layout(std430, binding = 0) readonly buffer Kernel {
-  vec4 weight[6];   // (A / normalisation, B / normalisation, 0, 0)
-  vec4 bracket[6];  // (O_re, S_re, O_im, S_im): Garcia's bracketing of Re F and Im F
-  vec4 taps[];      // [c * TAPS + i]: (Re F, Im F, G'_re, G'_im), i = x + R
+// A uniform buffer: the taps are read at a loop-uniform index, which lavapipe turns into plain
+// loads (a storage-buffer load in a loop is a per-lane loop) and GPUs serve from their constant
+// caches.
+layout(std140, binding = 0) uniform Kernel {
+  vec4 weight[6];                // (A / normalisation, B / normalisation, 0, 0)
+  vec4 bracket[6];               // (O_re, S_re, O_im, S_im): Garcia's bracketing of Re F and Im F
+  vec4 taps[COMPONENTS * TAPS];  // [c * TAPS + i]: (Re F, Im F, G'_re, G'_im), i = x + R
 } kernel;
 
-// Per-channel maxima M of the far (0..3) and near (4..7) RGBA layers as float bits (non-negative
-// floats order like their bits), reduced by circular_layers.comp.
+// Written by layers.comp: per-channel maxima M of the far (0..3) and near (4..7) RGBA layers as
+// float bits (non-negative floats order like their bits). The alpha maxima are always there (a
+// field whose alpha max is 0 is empty), the colour maxima for bracketed10.
 layout(std430, binding = 1) readonly buffer ChannelMax { uint max_bits[8]; };
 
 layout(std430, binding = 2) buffer Layer { vec4 layer[]; };  // this pass's RGBA layer (rgb w, w)

@@ -4,10 +4,12 @@
 // the intermediate precision. bracketed10 convolves with Garcia's bracketed kernels G' = (G - O) / S
 // (>= 0, summing to 1) so I' lies in [0, M], stores the 10-bit code of I' / M, and stores the box sum
 // sum(J) / M as half for the vertical pass to undo the bracketing. Mirrors horizontal_pass() in
-// kernels/circular_separable.cpp operation for operation.
+// kernels/circular/circular_separable.cpp operation for operation.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "convolution.glsl"
+
+layout(binding = 10) uniform samplerBuffer layer_texels;  // the layer again, read when TEXEL_LOADS
 
 #if PRECISION == 2
 #define TAP_RE t.z  // G'_re
@@ -17,9 +19,15 @@
 #define TAP_IM t.y  // Im F
 #endif
 
+// J(x, y) of this row, x clamped to the image.
+vec4 load_layer(uint row, int x) {
+  const uint i = row + uint(clamp(x, 0, params.width_px - 1));
+  return TEXEL_LOADS ? texelFetch(layer_texels, int(i)) : layer[i];
+}
+
 void main() {
   // This invocation computes OUTPUTS pixels along row y from column x0: each layer value it loads
-  // serves up to OUTPUTS taps. Per output pixel the sum still runs over i = 0..TAPS-1 in order.
+  // serves up to OUTPUTS taps. Per output pixel the sum runs over i = 0..TAPS-1 in order.
   const int x0 = int(gl_GlobalInvocationID.x) * OUTPUTS, y = int(gl_GlobalInvocationID.y);
   if (x0 >= params.width_px || y >= params.height_px) return;
   const uint row = uint(y * params.width_px);
@@ -29,21 +37,36 @@ void main() {
   FOR_EACH_COMPONENT(DECLARE)
   vec4 box[OUTPUTS];
   for (int k = 0; k < OUTPUTS; ++k) box[k] = vec4(0.0);
-  for (int s = 0; s < TAPS + OUTPUTS - 1; ++s) {
-    const vec4 j = layer[row + uint(clamp(x0 + s - RADIUS, 0, params.width_px - 1))];
-    for (int k = 0; k < OUTPUTS; ++k) {
-      const int i = s - k;  // tap index for output x0 + k
-      if (i < 0 || i >= TAPS) continue;
+  // Adds tap i times the layer value j to output k.
 #define ACCUMULATE(c, buf)                     \
   if (c < COMPONENTS) {                        \
     const vec4 t = kernel.taps[c * TAPS + i];  \
     re##c[k] += TAP_RE * j;                    \
     im##c[k] += TAP_IM * j;                    \
   }
-      FOR_EACH_COMPONENT(ACCUMULATE)
-#if PRECISION == 2
-      box[k] += j;
-#endif
+  if (SLIDING_WINDOW) {
+    // window[k] = J(x0 + k + i - R), the value output k takes at tap i: one new load per tap.
+    vec4 window[OUTPUTS];
+    for (int k = 1; k < OUTPUTS; ++k) window[k] = load_layer(row, x0 + k - 1 - RADIUS);
+    for (int i = 0; i < TAPS; ++i) {
+      for (int k = 0; k < OUTPUTS - 1; ++k) window[k] = window[k + 1];
+      window[OUTPUTS - 1] = load_layer(row, x0 + i + OUTPUTS - 1 - RADIUS);
+      for (int k = 0; k < OUTPUTS; ++k) {
+        const vec4 j = window[k];
+        FOR_EACH_COMPONENT(ACCUMULATE)
+        if (PRECISION == 2) box[k] += j;
+      }
+    }
+  } else {
+    // Value x0 + s - R serves tap i = s - k of output k.
+    for (int s = 0; s < TAPS + OUTPUTS - 1; ++s) {
+      const vec4 j = load_layer(row, x0 + s - RADIUS);
+      for (int k = 0; k < OUTPUTS; ++k) {
+        const int i = s - k;
+        if (i < 0 || i >= TAPS) continue;
+        FOR_EACH_COMPONENT(ACCUMULATE)
+        if (PRECISION == 2) box[k] += j;
+      }
     }
   }
 #if PRECISION == 0

@@ -1,5 +1,6 @@
 # Circular separable filters: intermediates f32, f16, bracketed10 (PRECISION 0, 1, 2; see
-# convolution.glsl), one horizontal and one vertical pass each.
+# convolution.glsl), one horizontal and one vertical pass each; the near/far split (layers) and the
+# indirect dispatch sizes of the convolution passes (plan).
 set(precisions f32 f16 bracketed10)
 foreach(precision IN LISTS precisions)
   list(FIND precisions ${precision} precision_id)
@@ -7,3 +8,4 @@ foreach(precision IN LISTS precisions)
   bokeh_shader(circular vertical_${precision} vertical.comp PRECISION=${precision_id})
 endforeach()
 bokeh_shader(circular layers layers.comp)
+bokeh_shader(circular plan plan.comp)

@@ -1,6 +1,7 @@
-// GPU circular separable filters (bench/gpu/circular_gpu.cpp, shaders/circular_*.comp) against the
-// CPU reference circular_blur (kernels/circular_separable.cpp), for 1..6 components and every
-// intermediate precision, plus the disc a point light makes on the GPU.
+// GPU circular separable filters (kernels/circular/circular_gpu.cpp, shaders/circular/) against the
+// CPU reference circular_blur (kernels/circular/circular_separable.cpp), for 1..6 components and every
+// intermediate precision, plus the disc a point light makes on the GPU, the pass shapes (bit for
+// bit against each other), empty fields (skipped, still matching the CPU) and the memory figures.
 //
 // The bound. GPU and CPU run the same passes in the same order on the same kernels, so they differ
 // only by (i) the CoC radius, which the GPU computes itself (measured here: the layers' w differ by
@@ -23,9 +24,11 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstring>
 #include <ostream>
 #include <string>
 
+#include "circular_gpu.hpp"
 #include "circular_separable.hpp"
 #include "coc.hpp"
 #include "run.hpp"
@@ -43,7 +46,7 @@ vk::Context& context() {
 }
 
 constexpr double kU = 1.0 / (1 << 24);        // f32 unit roundoff
-constexpr float kMinFarAlpha = 1e-4f;         // as kernels/circular_separable.cpp
+constexpr float kMinFarAlpha = 1e-4f;         // as kernels/circular/circular_separable.cpp
 
 struct GpuRun {
   Image output, packed;
@@ -220,23 +223,121 @@ INSTANTIATE_TEST_SUITE_P(ComponentsAndPrecisions, GpuCircular, ::testing::Values
          "_" + to_string(info.param.precision);
 });
 
+// The pass shapes (texel or storage-buffer loads, sliding window or not: circular_gpu.hpp) change
+// how the passes load, never what they sum or in which order: all four give the same bits, for
+// every precision, on a scene with both fields and partial blocks. {false, false} is the previous
+// implementation's loop structure (the one GPUs run).
+TEST(GpuCircularShapes, EveryPassShapeGivesTheSameBits) {
+  const Scene s = make_scene("hoops", 63, 46);
+  struct ShapeCase {
+    int components, near;
+    IntermediatePrecision precision;
+    std::vector<CircularPassShape> shapes;  // compared with the first
+  };
+  const std::vector<CircularPassShape> all = {{false, false}, {true, false}, {false, true}, {true, true}};
+  const std::vector<CircularPassShape> ends = {{false, false}, {true, true}};
+  // Every shape once (f32, both kernels different), the two ends for each other precision and for
+  // the largest component count (each shape compiles its own pipelines: a few seconds each here).
+  const std::vector<ShapeCase> cases = {{2, 1, IntermediatePrecision::f32, all},
+                                        {2, 1, IntermediatePrecision::f16, ends},
+                                        {2, 1, IntermediatePrecision::bracketed10, ends},
+                                        {6, 6, IntermediatePrecision::f32, ends}};
+  for (const ShapeCase& c : cases) {
+    FilterOptions options = find_method("circular" + std::to_string(c.components)).defaults({7, 2});
+    options.precision = to_string(c.precision);
+    options.values["near_components"] = c.near;
+    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px() * 1.2);
+    std::vector<Image> outputs;
+    for (const CircularPassShape& shape : c.shapes) {
+      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, options.pattern);
+      auto filter = make_circular_gpu(frame, options, c.components, shape);
+      vk::TimestampQueries timer(context(), 16);
+      gpu::warm_up(frame, *filter, timer);
+      gpu::run_frames(frame, *filter, timer);
+      outputs.push_back(frame.read_output());
+    }
+    for (std::size_t i = 1; i < outputs.size(); ++i) {
+      std::size_t differing = 0;
+      for (std::size_t v = 0; v < outputs[0].pixels.size(); ++v)
+        differing += std::memcmp(&outputs[i].pixels[v], &outputs[0].pixels[v], sizeof(float)) != 0;
+      EXPECT_EQ(differing, 0u) << "circular" << c.components << " near " << c.near << " " << to_string(c.precision)
+                               << ", texel loads " << c.shapes[i].texel_loads << ", sliding window "
+                               << c.shapes[i].sliding_window;
+    }
+  }
+}
+
+// An empty field is skipped on the GPU as on the CPU: its horizontal pass (and the near vertical
+// pass) run no invocations (pipeline statistics, where the device counts them), and the output still
+// matches the CPU reference. The same filter first renders a scene with both fields, so skipped
+// passes would show stale intermediates if anything read them.
+TEST(GpuCircularEmptyField, EmptyFieldRunsNoInvocationsAndMatchesCpu) {
+  const Scene s = make_scene("hoops", 63, 46);
+  const Method& method = find_method("circular2");
+  FilterOptions options = method.defaults({7, 2});
+  options.values["near_components"] = 1;
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px() * 1.2);
+  for (IntermediatePrecision p : {IntermediatePrecision::f32, IntermediatePrecision::bracketed10}) {
+    options.precision = to_string(p);
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, options.pattern);
+    auto filter = method.make_gpu(frame, options);
+    vk::TimestampQueries timer(context(), 16);
+    gpu::warm_up(frame, *filter, timer);
+    gpu::run_frames(frame, *filter, timer);  // both fields: every intermediate buffer written
+    // A plane behind the focus (near empty), then one in front of it (far empty); both blurred.
+    for (double depth_over_focus : {3.0, 0.5}) {
+      const Image depth(s.color.width, s.color.height, 1, static_cast<float>(lens.focus_distance_m * depth_over_focus));
+      vk::upload(context(), frame.depth, depth.pixels.data(), depth.pixels.size() * sizeof(float));
+      timer.count_invocations(true);
+      const std::vector<vk::PassTime> passes = gpu::run_frames(frame, *filter, timer);
+      timer.count_invocations(false);
+      const Image gpu_out = frame.read_output();
+      const Image cpu_out = run_cpu(method, s.color, depth, lens, options, 2);
+      double err = 0.0, image_max = 0.0;
+      for (std::size_t i = 0; i < cpu_out.pixels.size(); ++i) {
+        err = std::max(err, std::abs(double(gpu_out.pixels[i]) - cpu_out.pixels[i]));
+        image_max = std::max(image_max, std::abs(double(cpu_out.pixels[i])));
+      }
+      const bool near_empty = depth_over_focus > 1.0;
+      EXPECT_LE(err, method.gpu_tolerance(options) * image_max) << to_string(p) << ", depth x" << depth_over_focus;
+      EXPECT_GT(max_abs_diff(gpu_out, s.color), 0.01) << "the plane is blurred";
+      std::printf("[empty field] %s, depth %.1f x focus: max |GPU - CPU| %.3g of image max; invocations", to_string(p),
+                  depth_over_focus, err / image_max);
+      for (const vk::PassTime& pass : passes) std::printf(" %s %lld", pass.pass.c_str(), static_cast<long long>(pass.invocations));
+      std::printf("\n");
+      if (!context().info().pipeline_statistics) continue;
+      for (const vk::PassTime& pass : passes) {
+        const bool skipped = pass.pass == (near_empty ? "near_horizontal" : "far_horizontal") ||
+                             (near_empty && pass.pass == "near_vertical");
+        if (skipped) EXPECT_EQ(pass.invocations, 0) << pass.pass << ", depth x" << depth_over_focus;
+        else EXPECT_GT(pass.invocations, 0) << pass.pass << ", depth x" << depth_over_focus;
+      }
+    }
+  }
+}
+
 // intermediate_bytes(): the near and far RGBA f32 layers (32 B/px) plus one convolution's
 // intermediates for the larger component count, as circular_cost counts them for 4 channels (the
-// near and far convolutions run one after the other and share them), plus the kernel taps and the
-// 32 B of channel maxima; the driver may round each allocation up a little.
+// near and far convolutions run one after the other and share them), plus the two kernels' uniform
+// buffers, the 32 B of channel maxima and the 48 B of dispatch sizes; the driver may round each
+// allocation up a little. The method's memory model (gpu_memory) counts the same, less the last two.
 TEST(GpuCircularMemory, IntermediateBytesMatchCircularCost) {
   const Scene s = make_scene("hoops", 63, 46);
   for (IntermediatePrecision p : {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
-    FilterOptions options = find_method("circular3").defaults({9, 2});
+    const Method& method = find_method("circular3");
+    FilterOptions options = method.defaults({9, 2});
     options.precision = to_string(p);
     options.values["near_components"] = 1;
     gpu::GpuFrame frame(context(), s.color, s.depth_m, s.lens, options.pattern);
-    const auto filter = find_method("circular3").make_gpu(frame, options);
+    const auto filter = method.make_gpu(frame, options);
     const int kernel_radius = make_circular_kernel_for_disc(3, options.pattern.max_radius_px()).radius_px;
     const std::uint64_t pixels = 63 * 46;
     const std::uint64_t expected = pixels * (32 + circular_cost(3, kernel_radius, p, 4).intermediate_bytes_per_pixel);
     EXPECT_GE(filter->intermediate_bytes(), expected) << to_string(p);
     EXPECT_LE(filter->intermediate_bytes(), expected + 16384) << to_string(p);
+    const MemoryUse model = method.gpu_memory(options, 63, 46, &context());
+    EXPECT_GE(filter->intermediate_bytes(), model.bytes) << to_string(p);
+    EXPECT_LE(filter->intermediate_bytes(), model.bytes + 4096) << to_string(p);
   }
 }
 
