@@ -12,7 +12,8 @@ struct CocInput {
   Image radius_px;  // clamped to the pattern's max radius
   Image packed;     // (rgb / discrete disc area, radius)
 };
-CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern);
+CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern,
+                      int threads = default_cpu_threads());
 
 // The CPU reference, CoC pass included.
 Image run_cpu(const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
