@@ -43,8 +43,9 @@ inline bool in_disc(float radius_sq, int dx_px, int dy_px) {
 // disc index further down, which the tests check against them.
 inline int disc_reach_layer(float radius_sq, int dx_px, int spacing_px, int max_layer) {
   if (!in_disc(radius_sq, dx_px, 0)) return -1;
-  int z = static_cast<int>(std::sqrt(std::max(radius_sq - static_cast<float>(dx_px * dx_px), 0.0f)) / spacing_px);
-  z = std::min(z, max_layer);
+  // The guess is capped before the conversion: an infinite radius would make it undefined.
+  const float guess = std::sqrt(std::max(radius_sq - static_cast<float>(dx_px * dx_px), 0.0f)) / spacing_px;
+  int z = static_cast<int>(std::min(guess, static_cast<float>(max_layer)));
   while (z < max_layer && in_disc(radius_sq, dx_px, (z + 1) * spacing_px)) ++z;
   while (z > 0 && !in_disc(radius_sq, dx_px, z * spacing_px)) --z;
   return z;

@@ -2,6 +2,9 @@
 // A 3D image rather than a buffer: lavapipe's storage buffers stop at 128 MiB, and the paper's
 // 1080p/41x41 buffer is 332 MiB.
 //
+// The horizontal pass computes horizontal_block pixels per invocation at stride k (flag_gpu.hpp):
+// each loaded row sample serves them all, with the same layers bit for bit.
+//
 // Layer precisions (LayerPrecision, kernels/flag.hpp): one image format and one shader pair each.
 // The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
 // without the 3D-buffer writes, reducing each (row, layer, channel) to its min and max with
