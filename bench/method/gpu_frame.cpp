@@ -29,7 +29,9 @@ GpuFrame::GpuFrame(vk::Context& context, const Image& color_image, const Image& 
       depth(vk::make_storage_buffer(ctx, depth_m.pixel_count() * 4, "depth buffer")),
       packed(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "packed CoC buffer")),
       output(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "output buffer")),
-      coc_pass(ctx, vk::spirv("common/coc"), {kBuffer, kBuffer, kBuffer}, sizeof(PassParams)) {
+      disc_area(make_disc_area_buffer(ctx, pattern)),
+      coc_pass(ctx, vk::spirv("common/coc"), {kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(PassParams),
+               {pattern.spacing_px}) {
   validate(lens);
   validate(pattern);
   const auto rgba = to_rgba(color_image);
@@ -38,6 +40,16 @@ GpuFrame::GpuFrame(vk::Context& context, const Image& color_image, const Image& 
   coc_pass.bind(0, color);
   coc_pass.bind(1, depth);
   coc_pass.bind(2, packed);
+  coc_pass.bind(3, disc_area);
+}
+
+vk::Buffer make_disc_area_buffer(vk::Context& ctx, const GatherPattern& pattern) {
+  validate(pattern);
+  const DiscAreaTable table(pattern);
+  const auto& areas = table.by_index();
+  vk::Buffer buffer = vk::make_storage_buffer(ctx, areas.size() * sizeof(areas[0]), "disc area table");
+  vk::upload(ctx, buffer, areas.data(), areas.size() * sizeof(areas[0]));
+  return buffer;
 }
 
 Image GpuFrame::read_output() {
@@ -68,9 +80,11 @@ std::vector<vk::PassTime> run_frames(GpuFrame& frame, GpuFilter& filter, vk::Tim
   return vk::mean_per_frame(timer.read(), frames);
 }
 
-PassWork coc_pass_work(const GatherPattern& pattern, int width_px, int height_px) {
+PassWork coc_pass_work(const GatherPattern& /*pattern: the area lookup costs the same for every N*/, int width_px,
+                       int height_px) {
+  // One area-table entry per pixel (counted as its tap), colour (16 B), depth (4 B) and entry (4 B) read.
   const double pixels = static_cast<double>(width_px) * height_px;
-  return {"coc", pixels * pattern.size_n, pixels * 20, pixels * 16};
+  return {"coc", pixels, pixels * 24, pixels * 16};
 }
 
 void warm_up(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer) {

@@ -34,6 +34,7 @@ class GpuFrame {
   vk::Buffer depth;   // float per pixel, metres
   vk::Buffer packed;  // vec4 (rgb / discrete disc area, radius px), written by the CoC pass
   vk::Buffer output;  // vec4 (rgb, 1), written by the filter's last pass
+  vk::Buffer disc_area;  // int per disc index: the pattern's DiscAreaTable, read by the CoC pass
   vk::ComputePipeline coc_pass;
 
   std::uint32_t width() const { return static_cast<std::uint32_t>(params.width_px); }
@@ -41,6 +42,10 @@ class GpuFrame {
   Image read_output();  // RGB
   Image read_packed();  // RGBA as the CoC pass wrote it
 };
+
+// The pattern's DiscAreaTable in a storage buffer (int per disc index), as shaders that divide by
+// the discrete disc area read it.
+vk::Buffer make_disc_area_buffer(vk::Context& ctx, const GatherPattern& pattern);
 
 class GpuFilter {
  public:
@@ -58,8 +63,8 @@ class GpuFilter {
 // overhead and timer resolution on a fast GPU) and returns each pass's mean time per frame.
 std::vector<vk::PassTime> run_frames(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer, int frames = 1);
 
-// The CoC pass's work: it reads colour and depth, counts the discrete disc area over the pattern's
-// N columns, and writes the packed input.
+// The CoC pass's work: it reads colour and depth, looks the discrete disc area up, and writes the
+// packed input.
 PassWork coc_pass_work(const GatherPattern& pattern, int width_px, int height_px);
 
 // Runs every pipeline once over a tiny region: lavapipe JIT-compiles a pipeline on first use.

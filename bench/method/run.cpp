@@ -35,18 +35,19 @@ std::uint64_t available_memory_bytes() {
 
 }  // namespace
 
-CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern) {
+CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern,
+                      int threads) {
   check_color(color);
   CocInput in;
   in.radius_px = coc_radius_image(depth_m, lens, pattern.max_radius_px());
-  in.packed = pack_gather_input(color, in.radius_px, pattern);
+  in.packed = pack_gather_input(color, in.radius_px, pattern, threads);
   return in;
 }
 
 Image run_cpu(const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
               const FilterOptions& options, int threads, nlohmann::json* stats) {
   check_options(method, options);
-  const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern);
+  const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern, threads);
   if (stats) *stats = nlohmann::json::object();
   try {
     return method.cpu_reference({color, depth_m, lens, coc.radius_px, coc.packed, options, threads, stats});

@@ -13,7 +13,8 @@ struct CocInput {
   Image packed;     // (rgb / discrete disc area, radius)
 };
 // Also checks the colour (check_color) and depth before any work.
-CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern);
+CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens, const GatherPattern& pattern,
+                      int threads = default_cpu_threads());
 
 // The CPU reference, CoC pass included. `stats` receives what it found (CpuInput::stats) if given.
 Image run_cpu(const Method& method, const Image& color, const Image& depth_m, const Lens& lens,

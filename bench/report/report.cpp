@@ -20,6 +20,8 @@
 #include <fmt/format.h>
 
 #include "build_info.hpp"  // generated: BOKEH_GIT_COMMIT
+#include "half_float.hpp"
+#include "simd.hpp"
 
 #ifndef BOKEH_SOURCE_DIR
 #define BOKEH_SOURCE_DIR "."
@@ -136,6 +138,24 @@ std::string env_or(const char* name, const char* fallback) {
   return value ? value : fallback;
 }
 
+// How this binary was compiled, as far as it changes CPU speed (CMake option BOKEH_NATIVE).
+nlohmann::json build_json() {
+#if defined(BOKEH_MARCH_NATIVE)
+  const bool native = true;
+#else
+  const bool native = false;
+#endif
+#if defined(NDEBUG)
+  const bool optimised = true;
+#else
+  const bool optimised = false;
+#endif
+  return {{"march_native", native},
+          {"ndebug", optimised},
+          {"cpu_vector_floats", simd::kWidth},  // lanes of the CPU references' vectors: 4 (SSE2) or 8 (AVX)
+          {"half_conversion", half_conversion()}};
+}
+
 }  // namespace
 
 nlohmann::json device_json(const vk::DeviceInfo& d) {
@@ -165,7 +185,8 @@ nlohmann::json run_context(const vk::DeviceInfo* device) {
       // lavapipe's worker threads; unset means one per core.
       {"lp_num_threads", env_or("LP_NUM_THREADS", "unset")},
       {"device", device ? device_json(*device) : nlohmann::json(nullptr)},
-      {"power_state", {{"start", power_state(device)}}}};
+      {"power_state", {{"start", power_state(device)}}},
+      {"build", build_json()}};
   return ctx;
 }
 

@@ -47,19 +47,21 @@ Image coc_radius_image(const Image& depth_m, const Lens& lens, float max_radius_
   return radius;
 }
 
-Image pack_gather_input(const Image& color, const Image& radius_px, const GatherPattern& pattern) {
+Image pack_gather_input(const Image& color, const Image& radius_px, const GatherPattern& pattern, int threads) {
   if (color.channels < 3) throw std::invalid_argument("colour needs at least three channels");
   if (color.width != radius_px.width || color.height != radius_px.height)
     throw std::invalid_argument("colour and CoC images differ in size");
+  const DiscAreaTable areas(pattern);
   Image packed(color.width, color.height, 4);
-  for (int y = 0; y < color.height; ++y)
+  parallel_rows(color.height, threads, [&](int y) {
     for (int x = 0; x < color.width; ++x) {
       const float r = *radius_px.px(x, y);
-      const float inv_area = 1.0f / static_cast<float>(discrete_disc_area(r, pattern));
+      const float inv_area = 1.0f / static_cast<float>(areas.area(r));
       float* out = packed.px(x, y);
       for (int c = 0; c < 3; ++c) out[c] = color.px(x, y)[c] * inv_area;
       out[3] = r;
     }
+  });
   return packed;
 }
 

@@ -3,6 +3,7 @@
 #include "gather_pattern.hpp"
 #include "image.hpp"
 #include "lens.hpp"
+#include "parallel.hpp"
 
 namespace bokeh {
 
@@ -19,8 +20,9 @@ void check_depth(const Image& depth_m);
 Image coc_radius_image(const Image& depth_m, const Lens& lens, float max_radius_px);
 
 // The paper packs colour and radius in one RGBA texel. We pack (rgb / discrete disc area, radius):
-// gathers then only test the disc and add. RGB of `color` is linear.
-Image pack_gather_input(const Image& color, const Image& radius_px, const GatherPattern& pattern);
+// gathers then only test the disc and add. RGB of `color` is linear. Rows split over `threads`.
+Image pack_gather_input(const Image& color, const Image& radius_px, const GatherPattern& pattern,
+                        int threads = default_cpu_threads());
 
 // The largest |D - P| / D in a depth map: the CoC scale that reaches a given radius is r / this.
 double max_defocus_ratio(const Image& depth_m, const Lens& lens);

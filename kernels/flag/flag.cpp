@@ -7,6 +7,10 @@
 #include <Imath/half.h>
 #include <fmt/format.h>
 
+#include "half_float.hpp"
+#include "scratch.hpp"
+#include "simd.hpp"
+
 namespace bokeh {
 
 namespace {
@@ -179,8 +183,106 @@ Image flag_vertical(const FlagLayers& layers, const GatherPattern& p, int thread
   return out;
 }
 
-Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
+Image flag_blur_reference(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
   return flag_vertical(flag_horizontal(packed, p, precision, threads), p, threads);
+}
+
+namespace {
+
+// Columns per strip of flag_blur: a strip's layers, ceil(N/2) x 3 x height x strip floats, stay
+// within ~16 MiB (a few MiB at 800x600, N = 41), in multiples of the vector width.
+int strip_columns(int layers, int height) {
+  const double floats = 4.0 * 1024 * 1024 / (static_cast<double>(layers) * 3 * std::max(1, height));
+  return std::clamp(static_cast<int>(floats) / simd::kWidth * simd::kWidth, simd::kWidth, 64);
+}
+
+}  // namespace
+
+// flag_horizontal + flag_vertical, strip by strip. The horizontal pass writes a column's layers
+// from that row's input alone, and the vertical pass reads only that column's layers, so a strip of
+// columns is computed whole (no halo) while its layers fit in a buffer reused from frame to frame.
+// Per pixel the same float operations in the same order as the reference:
+//   horizontal: each sample's reach from its disc index (computed once per pixel, not per tap, and
+//     equal to disc_reach_layer), bins in sample order, accumulated outermost first, then rounded
+//     as the precision stores it (f16 in bulk: half_float.hpp);
+//   vertical: layer |j| of rows y + j k for j = -n .. n, vectorised across adjacent columns.
+Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
+  if (is_bracketed(precision)) return flag_blur_reference(packed, p, precision, threads);  // brackets span rows
+  check_layer_input(packed, precision);
+  const int w = packed.width, h = packed.height, n = p.half(), k = p.spacing_px, layers = p.layers();
+  const int max_index = 2 * n * n;
+  // reach_of[d] = min(isqrt(d), n): a column's reach is reach_of[index - i^2] (reach_layer).
+  std::vector<std::int16_t> reach_of(static_cast<std::size_t>(max_index) + 1);
+  for (int d = 0; d <= max_index; ++d) reach_of[static_cast<std::size_t>(d)] = static_cast<std::int16_t>(reach_layer(d, 0, n));
+  Scratch<std::int32_t> index_scratch(packed.pixel_count());
+  std::int32_t* const disc = index_scratch.data();
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float r = packed.px(x, y)[3];
+      disc[static_cast<std::size_t>(y) * w + x] = disc_index(r * r, k, max_index);
+    }
+  });
+
+  const int strip = strip_columns(layers, h), strips = (w + strip - 1) / strip;
+  const auto strip_floats = static_cast<std::size_t>(layers) * 3 * h * strip;
+  Image out(w, h, 3);
+  // Strip s goes to worker s % threads; each worker leases one strip buffer for all its strips.
+  const int workers = std::clamp(threads, 1, std::max(1, strips));
+  parallel_rows(workers, workers, [&](int worker) {
+    Scratch<float> scratch(strip_floats);
+    float* const buffer = scratch.data();
+    // buffer[((y * layers + z) * 3 + c) * strip + x - x0]: a pixel's values within one row's block
+    // (a few pages), the strip's columns contiguous for the vertical pass's vectors.
+    auto at = [&](int z, int c, int y) {
+      return buffer + ((static_cast<std::size_t>(y) * layers + z) * 3 + c) * strip;
+    };
+    std::vector<float> bins(static_cast<std::size_t>(layers) * 3);
+    for (int s = worker; s < strips; s += workers) {
+      const int x0 = s * strip, x1 = std::min(w, x0 + strip);
+      for (int y = 0; y < h; ++y) {
+        const std::int32_t* disc_row = disc + static_cast<std::size_t>(y) * w;
+        for (int x = x0; x < x1; ++x) {
+          std::fill(bins.begin(), bins.end(), 0.0f);
+          const int i_lo = std::max(-n, -(x / k)), i_hi = std::min(n, (w - 1 - x) / k);
+          for (int i = i_lo; i <= i_hi; ++i) {
+            const int sx = x + i * k, d = disc_row[sx] - i * i;
+            if (d < 0) continue;
+            const float* src = packed.px(sx, y);
+            float* bin = bins.data() + static_cast<std::size_t>(reach_of[static_cast<std::size_t>(d)]) * 3;
+            bin[0] += src[0], bin[1] += src[1], bin[2] += src[2];
+          }
+          float running[3] = {0, 0, 0};
+          for (int z = n; z >= 0; --z)
+            for (int c = 0; c < 3; ++c) at(z, c, y)[x - x0] = running[c] += bins[static_cast<std::size_t>(z) * 3 + c];
+        }
+        const auto row_values = static_cast<std::size_t>(x1 - x0);
+        if (precision == LayerPrecision::f16) {
+          for (int z = 0; z <= n; ++z)
+            for (int c = 0; c < 3; ++c) round_to_half(at(z, c, y), row_values);
+        } else if (precision != LayerPrecision::f32) {
+          for (int z = 0; z <= n; ++z)
+            for (int c = 0; c < 3; ++c)
+              for (std::size_t x = 0; x < row_values; ++x) at(z, c, y)[x] = round_layer_value(at(z, c, y)[x], precision, c);
+        }
+      }
+      // Vertical pass over the strip, kWidth columns at a time. A buffer row is `strip` wide, a
+      // multiple of kWidth: lanes past x1 read whatever is there and are dropped.
+      for (int y = 0; y < h; ++y)
+        for (int x = x0; x < x1; x += simd::kWidth) {
+          simd::f32v sum[3] = {};
+          for (int j = -n; j <= n; ++j) {
+            const int sy = y + j * k;
+            if (sy < 0 || sy >= h) continue;
+            for (int c = 0; c < 3; ++c) sum[c] += simd::load(at(j < 0 ? -j : j, c, sy) + (x - x0));
+          }
+          for (int l = 0; l < simd::kWidth && x + l < x1; ++l) {
+            float* o = out.px(x + l, y);
+            o[0] = sum[0][l], o[1] = sum[1][l], o[2] = sum[2][l];
+          }
+        }
+    }
+  });
+  return out;
 }
 
 Image flag_blur_in_strips(const Image& packed, const GatherPattern& p, LayerPrecision precision, int strip_px,

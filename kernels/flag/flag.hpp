@@ -71,8 +71,14 @@ void check_layer_input(const Image& packed, LayerPrecision precision);
 FlagLayers flag_horizontal(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                            int threads = default_cpu_threads());
 Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads());
+// The whole FLAG blur. For the per-value precisions (f32, f16, r11g11b10f) it runs strip by strip in a
+// buffer reused across calls, vectorised, bit for bit flag_blur_reference's result (tested); the
+// bracketed precisions take flag_blur_reference (their brackets span whole rows).
 Image flag_blur(const Image& packed, const GatherPattern& pattern, LayerPrecision precision = LayerPrecision::f32,
                 int threads = default_cpu_threads());
+// flag_vertical(flag_horizontal(...)): the straightforward passes through the whole 3D buffer.
+Image flag_blur_reference(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
+                          int threads = default_cpu_threads());
 
 // flag_blur computed on vertical strips of `strip_px` columns (each with the horizontal pass's halo
 // of k (N - 1) / 2 columns), so the 3D buffer held at once is a strip's, not the frame's. Bit for bit

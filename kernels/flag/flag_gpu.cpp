@@ -2,6 +2,9 @@
 // A 3D image rather than a buffer: lavapipe's storage buffers stop at 128 MiB, and the paper's
 // 1080p/41x41 buffer is 332 MiB.
 //
+// The horizontal pass computes horizontal_block pixels per invocation at stride k (flag_gpu.hpp):
+// each loaded row sample serves them all, with the same layers bit for bit.
+//
 // Layer precisions (LayerPrecision, kernels/flag.hpp): one image format and one shader pair each.
 // The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
 // without the 3D-buffer writes, reducing each (row, layer, channel) to its min and max with
@@ -43,10 +46,22 @@ std::uint64_t flag_bracket_buffer_bytes(std::uint32_t rows, std::uint32_t layers
   return 2ull * rows * layers * 4 * sizeof(std::uint32_t);  // min and max blocks of uvec4 (rgb, unused)
 }
 
+const std::vector<std::string>& flag_horizontal_blocks() {
+  static const std::vector<std::string> blocks = {"auto", "1", "2", "4", "8"};
+  return blocks;
+}
+
+int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device) {
+  const auto& name = flag_horizontal_blocks().at(static_cast<std::size_t>(options.integer("horizontal_block")));
+  if (name == "auto") return device.is_software() ? 4 : 1;
+  return std::stoi(name);
+}
+
 namespace {
 
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
 constexpr std::int32_t kBracketChunk = 32;  // pixels per invocation of flag_bracket.comp
+
 
 std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / b; }
 
@@ -69,12 +84,13 @@ class Flag final : public gpu::GpuFilter {
         pattern_(reduced_pattern(options.pattern, options.buffer_scale)),
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
+        outputs_(flag_horizontal_block(options, frame.ctx.info())),
         layers_(frame.ctx, layer_format(precision), low_width_, low_height_,
                 static_cast<std::uint32_t>(pattern_.layers())),
         horizontal_(frame.ctx, vk::spirv(std::string("flag/horizontal_") + to_string(precision)),
                     is_bracketed(precision) ? std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}
                                             : std::vector<VkDescriptorType>{kBuffer, kImage},
-                    sizeof(PassParams), {pattern_.layers()}),
+                    sizeof(PassParams), {pattern_.layers(), kBracketChunk, pattern_.spacing_px, outputs_}),
         vertical_(frame.ctx, vk::spirv(std::string("flag/vertical_") + to_string(precision)),
                   is_bracketed(precision) ? std::vector<VkDescriptorType>{kImage, kBuffer, kBuffer}
                                           : std::vector<VkDescriptorType>{kImage, kBuffer},
@@ -86,12 +102,15 @@ class Flag final : public gpu::GpuFilter {
       const VkDeviceSize low_bytes = static_cast<VkDeviceSize>(low_width_) * low_height_ * 16;
       packed_low_.emplace(vk::make_storage_buffer(frame.ctx, low_bytes, "low-res packed input"));
       output_low_.emplace(vk::make_storage_buffer(frame.ctx, low_bytes, "low-res FLAG output"));
-      downsample_.emplace(frame.ctx, vk::spirv("flag/downsample"), std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer},
-                          sizeof(PassParams),
-                          std::vector<std::int32_t>{scale_, frame.params.width_px, frame.params.height_px});
+      disc_area_low_.emplace(gpu::make_disc_area_buffer(frame.ctx, pattern_));
+      downsample_.emplace(frame.ctx, vk::spirv("flag/downsample"),
+                          std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(PassParams),
+                          std::vector<std::int32_t>{scale_, frame.params.width_px, frame.params.height_px,
+                                                    pattern_.spacing_px});
       downsample_->bind(0, frame.color);
       downsample_->bind(1, frame.packed);
       downsample_->bind(2, *packed_low_);
+      downsample_->bind(3, *disc_area_low_);
       upsample_.emplace(frame.ctx, vk::spirv("flag/upsample"),
                         std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(PassParams),
                         std::vector<std::int32_t>{scale_, static_cast<std::int32_t>(low_width_),
@@ -112,7 +131,8 @@ class Flag final : public gpu::GpuFilter {
           frame.ctx, flag_bracket_buffer_bytes(low_height_, static_cast<std::uint32_t>(pattern_.layers())),
           "FLAG bracket buffer"));
       bracket_.emplace(frame.ctx, vk::spirv("flag/bracket"), std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer},
-                       sizeof(PassParams), std::vector<std::int32_t>{pattern_.layers(), kBracketChunk});
+                       sizeof(PassParams),
+                       std::vector<std::int32_t>{pattern_.layers(), kBracketChunk, pattern_.spacing_px});
       bracket_->bind(0, *flag_input);
       bracket_->bind(2, *brackets_);
       horizontal_.bind(2, *brackets_);
@@ -145,7 +165,8 @@ class Flag final : public gpu::GpuFilter {
       bracket_->dispatch(cmd, &low, ceil_div(lw, kBracketChunk), lh);
       timer.end_pass(cmd, "bracket");
     }
-    horizontal_.dispatch(cmd, &low, lw, lh);
+    const std::uint32_t k = static_cast<std::uint32_t>(pattern_.spacing_px);
+    horizontal_.dispatch(cmd, &low, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, lh);
     timer.end_pass(cmd, "horizontal");
     vertical_.dispatch(cmd, &low, lw, lh);
     timer.end_pass(cmd, "vertical");
@@ -157,7 +178,7 @@ class Flag final : public gpu::GpuFilter {
 
   std::uint64_t intermediate_bytes() const override {
     std::uint64_t bytes = layers_.allocated_bytes();
-    for (const auto* b : {&packed_low_, &output_low_, &brackets_})
+    for (const auto* b : {&packed_low_, &output_low_, &brackets_, &disc_area_low_})
       if (*b) bytes += (*b)->allocated_bytes();
     return bytes;
   }
@@ -167,9 +188,10 @@ class Flag final : public gpu::GpuFilter {
   std::int32_t scale_;
   GatherPattern pattern_;  // the (low-res) pattern the FLAG passes run
   std::uint32_t low_width_, low_height_;
+  std::int32_t outputs_;  // pixels per invocation of the horizontal pass
   vk::StorageImage3D layers_;
   vk::ComputePipeline horizontal_, vertical_;
-  std::optional<vk::Buffer> packed_low_, output_low_, brackets_;
+  std::optional<vk::Buffer> packed_low_, output_low_, brackets_, disc_area_low_;
   std::optional<vk::ComputePipeline> downsample_, upsample_, bracket_;
 };
 

@@ -46,7 +46,11 @@ MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx
   }
   std::uint64_t other = 0;
   if (is_bracketed(precision)) other += flag_bracket_buffer_bytes(e.height, e.layers);
-  if (o.buffer_scale > 1) other += 2ull * e.width * e.height * 16;  // low-res packed input and output
+  if (o.buffer_scale > 1) {
+    other += 2ull * e.width * e.height * 16;  // low-res packed input and output
+    const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
+    other += DiscAreaTable(low).by_index().size() * sizeof(std::int32_t);  // the downsample's area table
+  }
   use.bytes = layers + other;
   const double paper = flag_paper_bytes(w, h, o.pattern, precision, o.buffer_scale);
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
@@ -83,6 +87,10 @@ void declare_flag(std::vector<Method>& methods) {
   // The paper's RGBA16F first: the default.
   std::swap(m.precisions[0], m.precisions[1]);
   m.buffer_scales = {1, 2, 4};
+  m.options = {{"horizontal_block",
+                "flag: pixels per GPU invocation of the horizontal pass, at stride k (auto: 4 on CPU devices such as "
+                "lavapipe, 1 on GPUs; every block gives the same image)",
+                0, 0, 0, false, flag_horizontal_blocks()}};
   m.device = [](const FilterOptions& o) {
     vk::DeviceRequirements needs;
     needs.storage_image_3d_formats = {layer_format(layer_precision_from_string(o.precision))};

@@ -29,6 +29,7 @@ Image flag_downsample(const Image& color, const Image& radius_px, const GatherPa
       color.height != radius_px.height)
     throw std::invalid_argument("flag_downsample: colour (>= 3 channels) and radius (1 channel) must match in size");
   const int w = ceil_div(color.width, scale), h = ceil_div(color.height, scale);
+  const DiscAreaTable areas(low);
   Image packed(w, h, 4);
   for (int ly = 0; ly < h; ++ly)
     for (int lx = 0; lx < w; ++lx) {
@@ -45,7 +46,7 @@ Image flag_downsample(const Image& color, const Image& radius_px, const GatherPa
         }
       const float mean_radius = weight > 0.0f ? weighted_radius / weight : 0.0f;
       const float r = std::min(mean_radius / static_cast<float>(scale), low.max_radius_px());
-      const float inv = 1.0f / (static_cast<float>(count) * static_cast<float>(discrete_disc_area(r, low)));
+      const float inv = 1.0f / (static_cast<float>(count) * static_cast<float>(areas.area(r)));
       float* out = packed.px(lx, ly);
       for (int c = 0; c < 3; ++c) out[c] = sum[c] * inv;
       out[3] = r;
@@ -88,7 +89,7 @@ ReducedFlag flag_reduced(const Image& color, const Image& radius_px, const Gathe
   check_layer_input(color, precision);  // before the downsample, whose weights could hide a negative colour
   ReducedFlag r;
   r.pattern = reduced_pattern(pattern, scale);
-  r.packed = scale == 1 ? pack_gather_input(color, radius_px, pattern)
+  r.packed = scale == 1 ? pack_gather_input(color, radius_px, pattern, threads)
                         : flag_downsample(color, radius_px, r.pattern, scale);
   r.layers = flag_horizontal(r.packed, r.pattern, precision, threads);
   r.blurred = flag_vertical(r.layers, r.pattern, threads);
@@ -98,7 +99,14 @@ ReducedFlag flag_reduced(const Image& color, const Image& radius_px, const Gathe
 
 Image flag_reduced_blur(const Image& color, const Image& radius_px, const GatherPattern& pattern, int scale,
                         LayerPrecision precision, int threads) {
-  return flag_reduced(color, radius_px, pattern, scale, precision, threads).output;
+  // flag_reduced's passes without keeping the intermediates; flag_blur gives flag_vertical(flag_horizontal()).
+  check_scale(scale);
+  validate(pattern);
+  if (scale == 1) return flag_blur(pack_gather_input(color, radius_px, pattern, threads), pattern, precision, threads);
+  check_layer_input(color, precision);
+  const GatherPattern low = reduced_pattern(pattern, scale);
+  const Image blurred = flag_blur(flag_downsample(color, radius_px, low, scale), low, precision, threads);
+  return flag_upsample(blurred, color, radius_px, scale);
 }
 
 }  // namespace bokeh

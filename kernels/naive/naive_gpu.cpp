@@ -1,36 +1,66 @@
-// GPU naive quadratic gather: one pass over the packed input.
+// GPU naive quadratic gather: one pass over the packed input, OUTPUTS_X x OUTPUTS_Y outputs per
+// invocation at stride k (shaders/naive/gather.comp).
 #include "naive_gpu.hpp"
+
+#include <stdexcept>
 
 #include "vk/spirv.hpp"
 
 namespace bokeh {
 
+const std::vector<std::string>& naive_gather_blocks() {
+  static const std::vector<std::string> blocks = {"auto", "1x1", "4x1", "4x4", "8x4", "8x8"};
+  return blocks;
+}
+
+OptionSpec naive_gather_block_option() {
+  return {"gather_block",
+          "naive gather: outputs per GPU invocation, at stride k (auto: 8x4 on CPU devices such as lavapipe, 1x1 "
+          "on GPUs; every block gives the same image)",
+          0, 0, 0, false, naive_gather_blocks()};
+}
+
+GatherBlock naive_gather_block(const FilterOptions& options, const vk::DeviceInfo& device) {
+  const auto& name = naive_gather_blocks().at(static_cast<std::size_t>(options.integer("gather_block")));
+  if (name == "auto") return device.is_software() ? GatherBlock{8, 4} : GatherBlock{1, 1};
+  const auto x = name.find('x');
+  return {std::stoi(name.substr(0, x)), std::stoi(name.substr(x + 1))};
+}
+
 namespace {
+
+std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / b; }
 
 class NaiveGather final : public gpu::GpuFilter {
  public:
-  explicit NaiveGather(gpu::GpuFrame& frame)
+  NaiveGather(gpu::GpuFrame& frame, GatherBlock block)
       : frame_(frame),
+        block_(block),
         gather_(frame.ctx, vk::spirv("naive/gather"),
-                {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, sizeof(gpu::PassParams)) {
+                {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, sizeof(gpu::PassParams),
+                {block.x, block.y}) {
     gather_.bind(0, frame.packed);
     gather_.bind(1, frame.output);
   }
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
-    gather_.dispatch(cmd, &frame_.params, frame_.width(), frame_.height());
+    // Invocation (gx, gy) covers block (gx / k, gy / k) of x k by y k pixels, phase (gx % k, gy % k).
+    const auto k = static_cast<std::uint32_t>(frame_.params.spacing_px);
+    const auto bx = static_cast<std::uint32_t>(block_.x), by = static_cast<std::uint32_t>(block_.y);
+    gather_.dispatch(cmd, &frame_.params, ceil_div(frame_.width(), bx * k) * k, ceil_div(frame_.height(), by * k) * k);
     timer.end_pass(cmd, "gather");
   }
   std::uint64_t intermediate_bytes() const override { return 0; }
 
  private:
   gpu::GpuFrame& frame_;
+  GatherBlock block_;
   vk::ComputePipeline gather_;
 };
 
 }  // namespace
 
-std::unique_ptr<gpu::GpuFilter> make_naive_gpu(gpu::GpuFrame& frame, const FilterOptions&) {
-  return std::make_unique<NaiveGather>(frame);
+std::unique_ptr<gpu::GpuFilter> make_naive_gpu(gpu::GpuFrame& frame, const FilterOptions& options) {
+  return std::make_unique<NaiveGather>(frame, naive_gather_block(options, frame.ctx.info()));
 }
 
 }  // namespace bokeh

@@ -10,6 +10,9 @@ void declare_naive(std::vector<Method>& methods) {
   m.name = "naive";
   m.description = "naive quadratic gather, N x N samples at spacing k (FLAG paper 3.1)";
   m.precisions = {"f32"};
+  // Same output for every block (bit for bit: each output adds its samples in the same order); only
+  // the speed differs, by device. See shaders/naive/gather.comp.
+  m.options = {naive_gather_block_option()};
   m.cpu_reference = [](const CpuInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); };
   m.make_gpu = make_naive_gpu;
   // Every pixel tests all N x N samples; it reads the packed image and writes the output once.

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "method.hpp"
+#include "naive_gpu.hpp"
 #include "sprites.hpp"
 #include "sprites_gpu.hpp"
 #include "vk/memory.hpp"
@@ -38,6 +39,7 @@ void declare_sprites(std::vector<Method>& methods) {
        3.0, 0.0, 1e4, false},
       {"max_sprites", "Sprites: most sprites a frame draws; more are counted as overflow and left in the gather",
        65536, 0, 4194304, true},
+      naive_gather_block_option(),  // the gather of the rest is naive's, with its GPU shape
   };
   m.device = [](const FilterOptions&) {
     vk::DeviceRequirements needs;

@@ -9,10 +9,12 @@
 layout(constant_id = 0) const int SCALE = 2;
 layout(constant_id = 1) const int FULL_WIDTH = 1;
 layout(constant_id = 2) const int FULL_HEIGHT = 1;
+layout(constant_id = 3) const int SPACING = 1;  // k of the low-res pattern, a constant divisor
 
 layout(std430, binding = 0) readonly buffer Color { vec4 color[]; };             // full res (rgb, 1)
 layout(std430, binding = 1) readonly buffer PackedFull { vec4 packed_full[]; };  // full res, .a = radius
 layout(std430, binding = 2) writeonly buffer PackedLow { vec4 packed_low[]; };   // low res
+layout(std430, binding = 3) readonly buffer AreaTable { int area_by_index[]; };  // the low-res pattern's
 
 float low_res_weight(float r) { return clamp(r * (2.0 / float(SCALE)) - 1.0, 0.0, 1.0); }
 
@@ -33,12 +35,8 @@ void main() {
     }
   const float mean_radius = weight > 0.0 ? weighted_radius / weight : 0.0;
   const float r = min(mean_radius / float(SCALE), params.max_radius_px);
-  const float r2 = r * r;
-  int area = 0;
-  for (int s = -params.half_n; s <= params.half_n; ++s) {
-    const int z = disc_reach_layer(r2, s * params.spacing_px, params.spacing_px, params.half_n);
-    if (z >= 0) area += 2 * z + 1;
-  }
+  const int m = disc_index(r * r, SPACING, 2 * params.half_n * params.half_n);
+  const int area = m < 0 ? 0 : area_by_index[max(m, 0)];
   const float inv = 1.0 / (float(count) * float(area));
   packed_low[index_of(p)] = vec4(sum * inv, r);
 }

@@ -2,25 +2,45 @@
 // values of FLAG's horizontal pass for one pixel, and the bracket buffer of the bracketed precisions.
 // Mirrors flag_horizontal() in kernels/flag.cpp, in the same order of float additions.
 
-layout(constant_id = 0) const int LAYERS = 21;  // ceil(N/2): sizes the private arrays
+layout(constant_id = 0) const int LAYERS = 21;   // ceil(N/2): sizes the private arrays; n = LAYERS - 1
+layout(constant_id = 2) const int SPACING = 2;   // k (= params.spacing_px), a constant divisor for disc_index
+layout(constant_id = 3) const int OUTPUTS = 1;   // pixels per invocation, at stride k along the row
 
 layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 
-// layer[z] = sum of the row's samples whose disc reaches vertical offset z k in this column.
-void flag_layers(ivec2 p, out vec3 layer[LAYERS]) {
-  const int n = params.half_n, k = params.spacing_px;
-  vec3 reach[LAYERS];
-  for (int z = 0; z < LAYERS; ++z) reach[z] = vec3(0.0);
-  for (int i = -n; i <= n; ++i) {
-    const int sx = p.x + i * k;
+// bins[m][z] = the row samples whose disc reaches exactly layer z in column p0.x + m k, added left to
+// right. Each loaded sample serves up to OUTPUTS columns (their offsets i - m differ); its disc
+// index is computed once, so a column's reach is a subtraction and an integer square root.
+void flag_bins(ivec2 p0, out vec3 bins[OUTPUTS][LAYERS]) {
+  const int n = LAYERS - 1, k = SPACING;
+  for (int m = 0; m < OUTPUTS; ++m)
+    for (int z = 0; z < LAYERS; ++z) bins[m][z] = vec3(0.0);
+  for (int i = -n; i < n + OUTPUTS; ++i) {
+    const int sx = p0.x + i * k;
     if (sx < 0 || sx >= params.width_px) continue;
-    const vec4 s = packed_input[index_of(ivec2(sx, p.y))];
-    const int z = disc_reach_layer(s.a * s.a, i * k, k, n);
-    if (z >= 0) reach[z] += s.rgb;
+    const vec4 s = packed_input[index_of(ivec2(sx, p0.y))];
+    const int index = disc_index(s.a * s.a, k, 2 * n * n);
+    for (int m = 0; m < OUTPUTS; ++m) {
+      const int di = i - m;
+      if (di < -n || di > n) continue;  // uniform: outside column m's pattern
+      const int z = reach_layer(index, di, n);
+      // A masked add to every bin rather than bins[m][z] += s: a dynamically indexed private array
+      // costs a scalar load and store per lane on lavapipe (measured: 30% of this pass), a select
+      // does not. Adding -0.0 leaves every sum exactly as it is.
+      if (z >= 0)
+        for (int zz = 0; zz < LAYERS; ++zz) bins[m][zz] += zz == z ? s.rgb : vec3(-0.0);
+    }
   }
+}
+
+// layer[z] = sum of the row's samples whose disc reaches vertical offset z k in this column: the
+// bins accumulated from the outermost layer inwards.
+void flag_layers(ivec2 p, out vec3 layer[LAYERS]) {
+  vec3 bins[OUTPUTS][LAYERS];
+  flag_bins(p, bins);
   vec3 running = vec3(0.0);
   for (int z = LAYERS - 1; z >= 0; --z) {
-    if (z <= n) running += reach[z];
+    running += bins[0][z];
     layer[z] = running;
   }
 }

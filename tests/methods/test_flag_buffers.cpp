@@ -3,10 +3,13 @@
 // for every precision and scale, reduced resolution against full resolution, and the memory figures.
 // Every bound is stated next to its check; measured / bound ratios are printed ([ measured ]).
 #include <gtest/gtest.h>
+#include <Imath/half.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -15,6 +18,7 @@
 #include "flag_memory.hpp"
 #include "flag_reduced.hpp"
 #include "flag_gpu.hpp"
+#include "half_float.hpp"
 #include "metrics.hpp"
 #include "run.hpp"
 #include "scene.hpp"
@@ -26,6 +30,13 @@ namespace {
 vk::Context& context() {
   static vk::Context ctx;
   return ctx;
+}
+
+// FLAG's defaults (every option of its own present) at this pattern and precision.
+FilterOptions flag_options(const GatherPattern& pattern, const std::string& precision) {
+  FilterOptions o = find_method("flag").defaults(pattern);
+  o.precision = precision;
+  return o;
 }
 
 void report(const std::string& what, double measured, double bound) {
@@ -84,15 +95,15 @@ TEST(FlagPrecision, NamesRoundTripAndTheRegistryAcceptsEveryOne) {
   for (LayerPrecision p : all_layer_precisions()) {
     EXPECT_EQ(layer_precision_from_string(to_string(p)), p);
     for (int scale : {1, 2, 4}) {
-      FilterOptions options{{9, 2}, to_string(p)};
+      FilterOptions options = flag_options({9, 2}, to_string(p));
       options.buffer_scale = scale;
       EXPECT_NO_THROW(check_options(find_method("flag"), options));
     }
   }
-  FilterOptions bad_scale{{9, 2}, "f16"};
+  FilterOptions bad_scale = flag_options({9, 2}, "f16");
   bad_scale.buffer_scale = 3;
   EXPECT_THROW(check_options(find_method("flag"), bad_scale), std::invalid_argument);
-  FilterOptions naive_half{{9, 2}, "f32"};
+  FilterOptions naive_half = find_method("naive").defaults({9, 2});
   naive_half.buffer_scale = 2;
   EXPECT_THROW(check_options(find_method("naive"), naive_half), std::invalid_argument);  // only FLAG has a 3D buffer
   EXPECT_EQ(bytes_per_texel(LayerPrecision::r11g11b10f), 4);
@@ -108,6 +119,43 @@ std::vector<double> all_ufloat_values(int m) {
     for (int f = 0; f < (1 << m); ++f)
       v.push_back(e == 0 ? std::ldexp(f, -14 - m) : std::ldexp((1 << m) + f, e - 15 - m));
   return v;
+}
+
+// The CPU's f16 storage: the F16C path (compiled in or chosen at run time) gives Imath's software
+// conversion bit for bit: every half, its float neighbours, every tie between two halves and the
+// floats next to it, overflow, subnormals, signed zeros, infinities, and random floats.
+TEST(FlagPrecision, HalfRoundingMatchesImathBitForBit) {
+  auto from_bits = [](std::uint32_t bits) {
+    Imath::half h;
+    h.setBits(static_cast<std::uint16_t>(bits));
+    return static_cast<float>(h);
+  };
+  std::vector<float> values;
+  for (std::uint32_t h = 0; h < 0x10000; ++h) {
+    if ((h & 0x7c00) == 0x7c00) continue;  // inf and NaN below
+    const float f = from_bits(h);
+    const float next = h == 0x7bff || h == 0xfbff ? std::copysign(65520.0f, f) : from_bits(h + 1);
+    const float tie = f + (next - f) / 2;  // exact: halves have 11 significant bits
+    for (float v : {f, tie, next}) values.insert(values.end(), {v, std::nextafter(v, -1e38f), std::nextafter(v, 1e38f)});
+  }
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::uint32_t> bits;
+  for (int i = 0; i < 200000; ++i) {
+    const std::uint32_t b = bits(rng);
+    float f;
+    std::memcpy(&f, &b, sizeof f);
+    if (std::isfinite(f)) values.push_back(f);
+  }
+  values.insert(values.end(), {0.0f, -0.0f, 65504.0f, 65519.99f, 65520.0f, 1e10f, -1e10f, 1e-8f, 5.96e-8f, 2.98e-8f,
+                               INFINITY, -INFINITY});
+  std::vector<float> fast = values, software = values;
+  round_to_half(fast.data(), fast.size());
+  round_to_half_software(software.data(), software.size());
+  std::printf("[ measured ] half conversion path: %s, %zu values\n", half_conversion().c_str(), values.size());
+  for (std::size_t i = 0; i < values.size(); ++i)
+    ASSERT_EQ(std::memcmp(&fast[i], &software[i], sizeof(float)), 0)
+        << values[i] << " -> " << fast[i] << " (fast) vs " << software[i] << " (Imath)";
+  EXPECT_TRUE(std::isnan(round_to_half(std::nanf(""))));
 }
 
 TEST(FlagPrecision, R11G11B10RoundingIsTheNearestRepresentableValueTiesToEven) {
@@ -224,11 +272,11 @@ TEST(FlagPrecision, BracketedBeatsThePlainFormatOfTheSameSize) {
 TEST(FlagPrecision, UnsignedPrecisionsRejectNegativeColours) {
   Scene s = make_scene("hoops", 32, 24);
   s.color.px(5, 7)[1] = -0.25f;
-  const FilterOptions f16{{5, 2}, "f16"};
+  const FilterOptions f16 = flag_options({5, 2}, "f16");
   EXPECT_NO_THROW(run_cpu(find_method("flag"), s.color, s.depth_m, s.lens, f16, 1));  // signed formats: fine
   for (const char* p : {"r11g11b10f", "unorm10_bracketed", "unorm16_bracketed"})
     for (int scale : {1, 2}) {
-      FilterOptions o{{5, 2}, p};
+      FilterOptions o = flag_options({5, 2}, p);
       o.buffer_scale = scale;
       for (bool gpu : {false, true}) {
         try {
@@ -296,7 +344,7 @@ Image low_res_bound(LayerPrecision p, const ReducedFlag& emu, const Image& exact
 TEST_P(GpuMatchesEmulation, WithinTheFormatsRoundingFreedom) {
   const GpuCase gc = GetParam();
   const SceneLayers s = scene_layers("hoops", 96, 64, {13, 2});
-  FilterOptions options{s.pattern, to_string(gc.precision)};
+  FilterOptions options = flag_options(s.pattern, to_string(gc.precision));
   options.buffer_scale = gc.scale;
   std::vector<vk::PassTime> passes;
   const Image gpu = run_gpu(context(), find_method("flag"), s.scene.color, s.scene.depth_m, s.lens, options, &passes);
@@ -385,7 +433,7 @@ TEST(FlagReduced, ZeroRadiiGiveTheInputExactly) {
     for (int scale : {1, 2, 4}) {
       // Full-res bracketed layers hold the colours themselves, quantised: exact only through f32.
       if (scale == 1 && std::string(precision) != "f32") continue;
-      FilterOptions o{{13, 2}, precision};
+      FilterOptions o = flag_options({13, 2}, precision);
       o.buffer_scale = scale;
       const Image cpu = run_cpu(find_method("flag"), s.color, s.depth_m, s.lens, o, 2);
       const Image gpu = run_gpu(context(), find_method("flag"), s.color, s.depth_m, s.lens, o);

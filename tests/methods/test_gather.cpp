@@ -1,13 +1,18 @@
-// CPU references: naive gather and FLAG agree, radius 0 is the identity, energy is conserved.
+// CPU references: naive gather and FLAG agree, radius 0 is the identity, energy is conserved; the
+// disc index and area table against in_disc; the fast references against the straightforward ones.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <random>
+#include <set>
 
 #include "coc.hpp"
 #include "flag.hpp"
 #include "naive_gather.hpp"
+#include "run.hpp"
+#include "scene.hpp"
 #include "test_support.hpp"
 
 namespace bokeh {
@@ -32,6 +37,119 @@ TEST(DiscreteDisc, ReachLayerMatchesDiscTestExactly) {
       const int z = disc_reach_layer(r * r, dx, 2, 10);
       for (int zz = 0; zz <= 10; ++zz) EXPECT_EQ(zz <= z, in_disc(r * r, dx, zz * 2)) << r << " " << dx << " " << zz;
     }
+}
+
+// Radii at which a pattern's discrete disc changes: r^2 just below, at and just above every squared
+// lattice distance (i^2 + j^2) k^2 of the pattern, plus radii beyond its largest circle.
+std::vector<float> threshold_radii(const GatherPattern& p) {
+  std::set<long long> distances;
+  for (int j = 0; j <= p.half(); ++j)
+    for (int i = j; i <= p.half(); ++i) distances.insert(static_cast<long long>(i * i + j * j) * p.spacing_px * p.spacing_px);
+  std::vector<float> radii = {0.0f, 1e-30f, p.max_radius_px() * 1.5f, 1e6f};
+  for (long long d : distances) {
+    const float r = std::sqrt(static_cast<float>(d));
+    radii.insert(radii.end(), {std::nextafter(r, 0.0f), r, std::nextafter(r, 1e38f)});
+  }
+  return radii;
+}
+
+// The area table and the disc index reproduce the O(N) count and in_disc for every radius at which
+// the disc changes, for every odd N up to 201 at k = 2, and for N = 201 at k = 1, 3 and 64 (where r^2
+// passes 2^24 and float(dx^2 + dy^2) rounds: the threshold's ties-to-even branch).
+TEST(DiscreteDisc, AreaTableEqualsTheCountForEveryRadiusUpToTheLargestPattern) {
+  std::vector<GatherPattern> patterns;
+  for (int n = 1; n <= 201; n += 2) patterns.push_back({n, 2});
+  for (int k : {1, 3, 64}) patterns.push_back({201, k});
+  long long checked = 0;
+  for (const GatherPattern& p : patterns) {
+    const DiscAreaTable table(p);
+    for (float r : threshold_radii(p)) {
+      ASSERT_EQ(table.area(r), discrete_disc_area(r, p)) << "N " << p.size_n << " k " << p.spacing_px << " r " << r;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(DiscAreaTable({201, 2}).area(0.0f), 1);
+  EXPECT_EQ(DiscAreaTable({201, 2}).area(1e9f), 201 * 201);
+  EXPECT_EQ(DiscAreaTable({41, 2}).area(std::nanf("")), 0);  // like the count: a NaN disc holds nothing
+  EXPECT_GT(checked, 400000);  // radii checked over all patterns
+}
+
+TEST(DiscreteDisc, DiscIndexAndReachMatchInDisc) {
+  std::mt19937 rng(11);
+  for (int k : {1, 2, 3, 7, 64}) {
+    const GatherPattern p{201, k};
+    const int n = p.half();
+    std::vector<float> radii = threshold_radii(p);
+    std::shuffle(radii.begin(), radii.end(), rng);
+    radii.resize(std::min<std::size_t>(radii.size(), 3000));
+    for (float r : radii) {
+      const float r2 = r * r;
+      const int index = disc_index(r2, k, 2 * n * n);
+      for (int j = 0; j <= n; j += 1 + j / 8)
+        for (int i = 0; i <= n; i += 1 + i / 8) {
+          ASSERT_EQ(i * i + j * j <= index, in_disc(r2, i * k, j * k)) << "k " << k << " r " << r << " i " << i << " j " << j;
+          ASSERT_EQ(reach_layer(index, i, n), disc_reach_layer(r2, i * k, k, n)) << "k " << k << " r " << r << " i " << i;
+        }
+    }
+  }
+}
+
+// The scenes the harness renders, packed by the CPU CoC pass, at sizes that leave partial vectors
+// and strips, with patterns whose discs cross the borders.
+struct PackedScene {
+  std::string name;
+  GatherPattern pattern;
+  Image packed;
+};
+std::vector<PackedScene> packed_scenes() {
+  std::vector<PackedScene> out;
+  const GatherPattern patterns[] = {{1, 2}, {9, 2}, {7, 3}, {11, 1}, {41, 2}};
+  for (const std::string name : {"hoops", "pillars", "points"})
+    for (const GatherPattern& p : patterns) {
+      const Scene s = make_scene(name, 61, 43);
+      const Lens lens = with_max_coc_radius(s.lens, s.depth_m, p.max_radius_px() * 1.2);
+      out.push_back({name, p, cpu_coc_pass(s.color, s.depth_m, lens, p, 2).packed});
+    }
+  return out;
+}
+
+::testing::AssertionResult same_bits(const Image& a, const Image& b) {
+  if (!a.same_shape(b)) return ::testing::AssertionFailure() << "shapes differ";
+  for (std::size_t i = 0; i < a.pixels.size(); ++i)
+    if (std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0)
+      return ::testing::AssertionFailure() << "value " << i << ": " << a.pixels[i] << " vs " << b.pixels[i];
+  return ::testing::AssertionSuccess();
+}
+
+TEST(CpuReferences, VectorisedNaiveGatherEqualsTheReferenceBitForBit) {
+  for (const PackedScene& s : packed_scenes())
+    for (int threads : {1, 2})
+      EXPECT_TRUE(same_bits(naive_gather(s.packed, s.pattern, threads), naive_gather_reference(s.packed, s.pattern, 1)))
+          << s.name << " N " << s.pattern.size_n << " k " << s.pattern.spacing_px << " threads " << threads;
+}
+
+TEST(CpuReferences, StripFlagEqualsTheReferenceBitForBit) {
+  for (const PackedScene& s : packed_scenes())
+    for (LayerPrecision precision : all_layer_precisions())
+      for (int threads : {1, 3})
+        EXPECT_TRUE(same_bits(flag_blur(s.packed, s.pattern, precision, threads),
+                              flag_blur_reference(s.packed, s.pattern, precision, 1)))
+            << s.name << " N " << s.pattern.size_n << " k " << s.pattern.spacing_px << " " << to_string(precision)
+            << " threads " << threads;
+}
+
+// Images narrower than a vector and a strip, and one row high.
+TEST(CpuReferences, FastReferencesOnTinyImages) {
+  const GatherPattern p{5, 1};
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{3, 7}, std::pair{9, 1}, std::pair{70, 2}}) {
+    const Image color = random_image(w, h, 3, 0.0f, 2.0f, 9);
+    const Image radius = random_image(w, h, 1, 0.0f, 3.0f, 10);
+    const Image packed = pack_gather_input(color, radius, p, 2);
+    EXPECT_TRUE(same_bits(naive_gather(packed, p, 2), naive_gather_reference(packed, p, 1))) << w << "x" << h;
+    EXPECT_TRUE(same_bits(flag_blur(packed, p, LayerPrecision::f16, 2),
+                          flag_blur_reference(packed, p, LayerPrecision::f16, 1)))
+        << w << "x" << h;
+  }
 }
 
 TEST(CpuReferences, RadiusZeroIsTheIdentity) {

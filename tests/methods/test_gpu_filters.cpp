@@ -2,8 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "coc.hpp"
+#include "flag.hpp"
+#include "flag_gpu.hpp"
+#include "naive_gather.hpp"
+#include "naive_gpu.hpp"
 #include "run.hpp"
 #include "scene.hpp"
 
@@ -25,6 +30,13 @@ vk::Context& context() {
   return ctx;
 }
 
+// A method's defaults (every option of its own present) at this pattern and precision.
+FilterOptions options_for(const char* method, const GatherPattern& pattern, const std::string& precision) {
+  FilterOptions o = find_method(method).defaults(pattern);
+  o.precision = precision;
+  return o;
+}
+
 struct Case {
   const char* scene;
   int size_n, spacing_px;
@@ -38,7 +50,7 @@ TEST_P(GpuMatchesCpu, CocPassPacksLikeCpu) {
   const GatherPattern pattern{c.size_n, c.spacing_px};
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
   gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-  auto filter = find_method("naive").make_gpu(frame, {pattern, "f32"});
+  auto filter = find_method("naive").make_gpu(frame, options_for("naive", pattern, "f32"));
   vk::TimestampQueries timer(context(), 8);
   gpu::run_frames(frame, *filter, timer);
   const Image gpu_packed = frame.read_packed();
@@ -51,13 +63,48 @@ TEST_P(GpuMatchesCpu, CocPassPacksLikeCpu) {
 TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
   const Case c = GetParam();
   const Scene s = make_scene(c.scene, 96, 64);
-  const FilterOptions options{{c.size_n, c.spacing_px}, "f32"};
-  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px() * 1.2);
-  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options, 2);
+  const GatherPattern pattern{c.size_n, c.spacing_px};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options_for("naive", pattern, "f32"), 2);
   for (const char* method : {"naive", "flag"}) {
-    const Image gpu = run_gpu(context(), find_method(method), s.color, s.depth_m, lens, options);
+    const Image gpu = run_gpu(context(), find_method(method), s.color, s.depth_m, lens, options_for(method, pattern, "f32"));
     EXPECT_LT(max_rel_error(gpu, reference), 1e-5) << method;
   }
+}
+
+// Every block of outputs per invocation (gather_block, horizontal_block) keeps each pixel's order
+// of additions, so on the same packed input the GPU gives the strictly ordered CPU references' image
+// bit for bit: naive_gather_reference, and for f32 layers flag_blur_reference. Run on the packed input
+// the GPU's CoC pass wrote (its divisions may round differently from the CPU's).
+TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
+  const Case c = GetParam();
+  const Scene s = make_scene(c.scene, 63, 46);  // partial blocks and workgroups at the right and bottom
+  const GatherPattern pattern{c.size_n, c.spacing_px};
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  vk::TimestampQueries timer(context(), 16);
+  auto same_bits = [](const Image& a, const Image& b) {
+    return a.same_shape(b) && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+  };
+  struct Variant {
+    const char* method;
+    const char* option;
+    std::vector<std::string> choices;
+  };
+  const Variant variants[] = {{"naive", "gather_block", naive_gather_blocks()},
+                              {"flag", "horizontal_block", flag_horizontal_blocks()}};
+  for (const Variant& v : variants)
+    for (std::size_t choice = 0; choice < v.choices.size(); ++choice) {
+      FilterOptions o = options_for(v.method, pattern, "f32");
+      o.values[v.option] = static_cast<double>(choice);
+      auto filter = find_method(v.method).make_gpu(frame, o);
+      gpu::run_frames(frame, *filter, timer);
+      const Image packed = frame.read_packed();
+      const Image reference = std::string(v.method) == "naive"
+                                  ? naive_gather_reference(packed, pattern, 2)
+                                  : flag_blur_reference(packed, pattern, LayerPrecision::f32, 2);
+      EXPECT_TRUE(same_bits(frame.read_output(), reference)) << v.method << " " << v.option << " " << v.choices[choice];
+    }
 }
 
 // RGBA16F layers: every stored layer value is a sum of non-negative terms rounded once to half,
@@ -68,10 +115,10 @@ TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
 TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
   const Case c = GetParam();
   const Scene s = make_scene(c.scene, 96, 64);
-  const FilterOptions f32{{c.size_n, c.spacing_px}, "f32"};
-  const FilterOptions f16{{c.size_n, c.spacing_px}, "f16"};
-  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, f32.pattern.max_radius_px());
-  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, f32, 2);
+  const GatherPattern pattern{c.size_n, c.spacing_px};
+  const FilterOptions f16 = options_for("flag", pattern, "f16");
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options_for("naive", pattern, "f32"), 2);
   const Image gpu16 = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, f16);
   const Image cpu16 = run_cpu(find_method("flag"), s.color, s.depth_m, lens, f16, 2);
   const double round_to_nearest = std::ldexp(1.0, -11), round_toward_zero = std::ldexp(1.0, -10);
@@ -95,9 +142,9 @@ TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
   Image depth(32, 24, 1, 3.0f);  // everything in focus: radius 0, output = input in exact arithmetic
   for (int c = 0; c < 3; ++c) color.px(16, 12)[c] = 1e5f;
   const Lens lens;
-  const Image f32 = run_gpu(context(), find_method("flag"), color, depth, lens, {{9, 2}, "f32"});
+  const Image f32 = run_gpu(context(), find_method("flag"), color, depth, lens, options_for("flag", {9, 2}, "f32"));
   EXPECT_EQ(f32.px(16, 12)[0], 1e5f);
-  const Image f16 = run_gpu(context(), find_method("flag"), color, depth, lens, {{9, 2}, "f16"});
+  const Image f16 = run_gpu(context(), find_method("flag"), color, depth, lens, options_for("flag", {9, 2}, "f16"));
   const float v = f16.px(16, 12)[0];
   EXPECT_FALSE(std::isnan(v));
   EXPECT_TRUE(std::isinf(v) || v <= 65504.0f) << "f16 layers cannot hold 1e5: got " << v;
@@ -109,10 +156,10 @@ TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
 TEST(GpuExtremes, NearZeroDepthClampsToTheMaxRadius) {
   Scene s = make_scene("hoops", 48, 32);
   for (int x = 0; x < 48; ++x) *s.depth_m.px(x, 16) = 1e-7f;
-  const FilterOptions options{{7, 2}, "f32"};
-  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, s.lens, options, 2);
+  const GatherPattern pattern{7, 2};
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, s.lens, options_for("naive", pattern, "f32"), 2);
   for (const char* method : {"naive", "flag"}) {
-    const Image out = run_gpu(context(), find_method(method), s.color, s.depth_m, s.lens, options);
+    const Image out = run_gpu(context(), find_method(method), s.color, s.depth_m, s.lens, options_for(method, pattern, "f32"));
     for (float v : out.pixels) ASSERT_TRUE(std::isfinite(v)) << method;
     EXPECT_LT(max_rel_error(out, reference), 1e-5) << method;
   }
@@ -121,10 +168,10 @@ TEST(GpuExtremes, NearZeroDepthClampsToTheMaxRadius) {
 // Circles far larger than the image: every pixel's disc leaves the frame on all sides.
 TEST(GpuExtremes, RadiiLargerThanTheImage) {
   const Scene s = make_scene("pillars", 40, 24);
-  const FilterOptions options{{61, 4}, "f32"};  // max radius 120 px on a 40x24 image
-  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, options.pattern.max_radius_px());
-  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options, 2);
-  const Image out = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, options);
+  const GatherPattern pattern{61, 4};  // max radius 120 px on a 40x24 image
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
+  const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options_for("naive", pattern, "f32"), 2);
+  const Image out = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, options_for("flag", pattern, "f32"));
   EXPECT_LT(max_rel_error(out, reference), 1e-5);
 }
 

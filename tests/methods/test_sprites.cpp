@@ -146,7 +146,7 @@ TEST(Sprites, OverflowPastTheMaximumIsCountedReportedAndKeepsTheLight) {
   const Both none = run_both(s, options({17, 1}, 0));
   EXPECT_EQ(none.gpu_stats["sprites_overflowed"], 12);
   EXPECT_EQ(none.gpu_stats["sprites_drawn"], 0);
-  const Image naive = run_cpu(find_method("naive"), s.color, s.depth_m, s.lens, {{17, 1}, "f32"}, 2);
+  const Image naive = run_cpu(find_method("naive"), s.color, s.depth_m, s.lens, find_method("naive").defaults({17, 1}), 2);
   EXPECT_LE(max_abs_diff(none.gpu, naive), 1e-5 * max_abs(naive));
   EXPECT_EQ(max_abs_diff(none.cpu, naive), 0.0);
 }
@@ -252,7 +252,7 @@ TEST(Sprites, CloserToTheExactScatterThanNaiveOnPointLights) {
   const Lens lens = with_max_coc_radius(scene.lens, scene.depth_m, pattern.max_radius_px());
   const Image radius = coc_radius_image(scene.depth_m, lens, pattern.max_radius_px());
   const Image exact = exact_scatter(scene.color, radius, scene.depth_m, ScatterComposite::energy_sum, 2);
-  const Image naive = run_cpu(find_method("naive"), scene.color, scene.depth_m, lens, {pattern, "f32"}, 2);
+  const Image naive = run_cpu(find_method("naive"), scene.color, scene.depth_m, lens, find_method("naive").defaults(pattern), 2);
   nlohmann::json stats;
   const Image splat = run_gpu(context(), sprites(), scene.color, scene.depth_m, lens, options(pattern), nullptr, &stats);
   const double naive_rmse = compare_images(naive, exact).rmse, sprites_rmse = compare_images(splat, exact).rmse;
@@ -272,7 +272,7 @@ TEST(Sprites, TimestampsStayWithTheirPassesAfterADraw) {
   const Lens lens = with_max_coc_radius(scene.lens, scene.depth_m, pattern.max_radius_px());
   run_gpu(context(), sprites(), scene.color, scene.depth_m, lens, options(pattern));
   std::vector<vk::PassTime> passes;
-  run_gpu(context(), find_method("naive"), scene.color, scene.depth_m, lens, {pattern, "f32"}, &passes);
+  run_gpu(context(), find_method("naive"), scene.color, scene.depth_m, lens, find_method("naive").defaults(pattern), &passes);
   ASSERT_EQ(passes.size(), 2u);
   EXPECT_GT(passes[1].ms, passes[0].ms) << "coc " << passes[0].ms << " ms, gather " << passes[1].ms << " ms";
 }
