@@ -23,16 +23,23 @@
 //
 // Radius-following mode (adaptive on: circular_blur_adaptive() on the CPU, pass for pass):
 //   layers           as above, but the layers hold (rgb, s) with s the bucket coordinate of the
-//                    radius, and each field's bucket mask is reduced (subgroupOr + atomicOr); `plan`
-//                    turns the masks into the indirect dispatch sizes of every bucket's passes.
-//   far              for each bucket k = 1..K present in the far field (ascending): a horizontal pass
-//                    (the layer's share (rgb, 1) max(0, 1 - |s - k|), bucket k's kernel) and a
-//                    vertical pass adding its result to the field's sum; then composite.comp (far).
+//                    radius, and each field's bucket mask, whole and per 32 x 32 tile, is reduced
+//                    (subgroupOr + atomicOr).
+//   tiles            tiles.comp lists the tiles each bucket's passes visit (its pixels' tiles spread
+//                    by its kernel's reach, shaders/circular/tiles.glsl); `plan` turns the lists'
+//                    lengths into the indirect dispatch sizes of every bucket's passes (4 workgroups
+//                    a tile; none for an empty list).
+//   far              for each bucket k = 1..K of the far field (ascending): a horizontal pass (the
+//                    layer's share (rgb, 1) max(0, 1 - |s - k|), bucket k's kernel) and a vertical
+//                    pass adding its result to the field's sum, over their tiles; then
+//                    composite.comp (far).
 //   near             the same for the near field (sum zeroed again), then composite.comp (near).
-// Each bucket's kernel has its own uniform buffer and its own pipelines (kernel radius and
-// components as specialization constants); the component buffers are shared by all of them. The
-// per-bucket passes are stamped as one pass per field: the runner reserves timestamps per named
-// pass, and a field's buckets interleave horizontal and vertical passes.
+// Skipped tiles hold exact zeros of the full convolution, so the output is the same as without
+// tiles. Each bucket's kernel has its own uniform buffer and pipelines (kernel radius and
+// components as specialization constants; a far and a near bucket with the same kernel share
+// pipelines); the component buffers are shared by all of them. A field's bucket passes are stamped
+// as one pass: the runner reserves timestamps per named pass, and the buckets interleave
+// horizontal and vertical passes.
 #include <algorithm>
 #include <bit>
 #include <cstdint>
@@ -140,13 +147,13 @@ std::vector<std::int32_t> spec(const CircularKernel& k, int layer, int outputs, 
           bucket,       buckets};
 }
 
-// Tiles of the radius-following mode (shaders/circular/tiles.glsl): a tile is one workgroup of
-// kHorizontalOutputs-pixel invocations wide and 4 workgroups high (8 x 8 invocations each), and the
-// transpose for the vertical pass.
-constexpr int kListCounts = 4 * 32;  // kTilePx: circular_separable.hpp
+// Tiles of the radius-following mode (kTilePx, circular_separable.hpp; shaders/circular/tiles.glsl):
+// a tile is one workgroup of kHorizontalOutputs-pixel invocations wide and 4 workgroups high (8 x 8
+// invocations each; plan.comp dispatches 1 x 4 workgroups a list entry), and the transpose for the
+// vertical pass. Lists: one per field, bucket and pass, their lengths first in the tile state.
+constexpr int kListCounts = 4 * 32;
+constexpr std::uint32_t kZeroTile = 0x80000000u;  // ZERO_TILE: a horizontal entry that writes zeros
 static_assert(kTilePx == 8 * kHorizontalOutputs && kTilePx == 8 * kVerticalOutputs && kTilePx == 4 * 8);
-// Dispatch size of one tile entry: 1 x 4 workgroups.
-constexpr std::uint32_t kWorkgroupsPerTile = 4;
 int tile_list_index(int field, int bucket, int pass) { return 2 * (32 * field + bucket - 1) + pass; }
 
 // The Buckets block of layers.comp and tiles.comp (std140): ramp[k] = (scale, offset, 0, 0), then
@@ -177,7 +184,7 @@ struct PlanGroups {
   std::uint32_t horizontal_x, horizontal_y, vertical_x, vertical_y;
 };
 // Offsets of the VkDispatchIndirectCommands plan.comp writes (fixed kernel; the radius-following
-// mode writes 2 per bucket and field, at 16 (2 (f K + k - 1) + pass)).
+// mode writes one per tile list, at 16 tile_list_index(f, k, pass)).
 constexpr VkDeviceSize kFarHorizontalArgs = 0, kNearHorizontalArgs = 16, kNearVerticalArgs = 32, kArgsBytes = 48;
 VkDeviceSize bucket_args(int field, int bucket, int pass) {
   return 16 * static_cast<VkDeviceSize>(tile_list_index(field, bucket, pass));
@@ -216,14 +223,13 @@ class Circular final : public gpu::GpuFilter {
                                      "circular buckets")),
         tile_state_(vk::make_storage_buffer(frame.ctx, adaptive ? 4 * (kListCounts + 4 * tiles()) : 16,
                                             "circular tile state")),
-        tile_lists_(vk::make_storage_buffer(
-            frame.ctx, adaptive ? 4 * static_cast<VkDeviceSize>(tile_list_index(1, buckets_.count(), 1) + 1) * tiles() : 16,
-            "circular tile lists")),
+        tile_lists_(vk::make_storage_buffer(frame.ctx,
+                                            adaptive ? 4 * (tile_list_index(1, buckets_.count(), 1) + 1) * tiles() : 16,
+                                            "circular tile lists")),
         far_layer_texels_(frame.ctx, far_layer_, VK_FORMAT_R32G32B32A32_SFLOAT, 16, "circular far layer"),
         near_layer_texels_(frame.ctx, near_layer_, VK_FORMAT_R32G32B32A32_SFLOAT, 16, "circular near layer"),
         box_texels_(frame.ctx, box_, VK_FORMAT_R32G32_UINT, 8, "circular box-sum buffer"),
-        layers_(frame.ctx, vk::spirv("circular/layers"), layers_bindings(),
-                sizeof(PassParams),
+        layers_(frame.ctx, vk::spirv("circular/layers"), layers_bindings(), sizeof(PassParams),
                 {precision == IntermediatePrecision::bracketed10 ? 1 : 0, adaptive ? 1 : 0, buckets_.count()}),
         plan_(frame.ctx, vk::spirv("circular/plan"), {kBuffer, kBuffer, kBuffer}, sizeof(PlanGroups),
               {adaptive ? 1 : 0, buckets_.count()}),
@@ -357,7 +363,8 @@ class Circular final : public gpu::GpuFilter {
     std::uint64_t bytes = far_layer_.allocated_bytes() + near_layer_.allocated_bytes() +
                           channel_max_.allocated_bytes() + box_.allocated_bytes() + dispatch_args_.allocated_bytes() +
                           bucket_ramps_.allocated_bytes();
-    if (adaptive_) bytes += field_sum_.allocated_bytes() + tile_state_.allocated_bytes() + tile_lists_.allocated_bytes();
+    if (adaptive_)
+      bytes += field_sum_.allocated_bytes() + tile_state_.allocated_bytes() + tile_lists_.allocated_bytes();
     for (const auto& field : fields_)
       for (const auto& b : field) bytes += b->taps.allocated_bytes();
     for (const vk::Buffer& b : inter_) bytes += b.allocated_bytes();
@@ -371,7 +378,8 @@ class Circular final : public gpu::GpuFilter {
     vk::download(frame_.ctx, channel_max_, words, sizeof words);
     const int w = static_cast<int>(frame_.width()), h = static_cast<int>(frame_.height());
     const int columns = (w + kTilePx - 1) / kTilePx, rows = (h + kTilePx - 1) / kTilePx, tiles = columns * rows;
-    std::vector<std::uint32_t> counts(kListCounts), lists(static_cast<std::size_t>(tile_list_index(1, buckets_.count(), 1) + 1) * tiles);
+    std::vector<std::uint32_t> counts(kListCounts);
+    std::vector<std::uint32_t> lists(static_cast<std::size_t>(tile_list_index(1, buckets_.count(), 1) + 1) * tiles);
     vk::download(frame_.ctx, tile_state_, counts.data(), counts.size() * 4);
     vk::download(frame_.ctx, tile_lists_, lists.data(), lists.size() * 4);
     AdaptiveWork work;
@@ -386,13 +394,12 @@ class Circular final : public gpu::GpuFilter {
           const int list = tile_list_index(f, k, pass);
           for (std::uint32_t e = 0; e < counts[list]; ++e) {
             const std::uint32_t entry = lists[static_cast<std::size_t>(list) * tiles + e];
-            const int t = static_cast<int>(entry & 0x7fffffffu);
+            const int t = static_cast<int>(entry & ~kZeroTile);
             const double pixels = static_cast<double>(std::min(kTilePx, w - (t % columns) * kTilePx)) *
                                   std::min(kTilePx, h - (t / columns) * kTilePx);
-            if (pass == 1) ++vertical;
-            else if (entry & 0x80000000u) ++zeroed;
-            else ++computed;
-            if (pass == 1 || !(entry & 0x80000000u)) work.taps[f] += pixels * taps;
+            int& count = pass == 1 ? vertical : (entry & kZeroTile) ? zeroed : computed;
+            ++count;
+            if (pass == 1 || !(entry & kZeroTile)) work.taps[f] += pixels * taps;
           }
         }
         work.horizontal_tiles[f].push_back(computed);
@@ -410,7 +417,8 @@ class Circular final : public gpu::GpuFilter {
   static std::uint32_t vertical_invocations(std::uint32_t h) { return (h + kVerticalOutputs - 1) / kVerticalOutputs; }
   VkDeviceSize pixels() const { return static_cast<VkDeviceSize>(frame_.width()) * frame_.height(); }
   VkDeviceSize tiles() const {
-    return static_cast<VkDeviceSize>((frame_.width() + kTilePx - 1) / kTilePx) * ((frame_.height() + kTilePx - 1) / kTilePx);
+    return static_cast<VkDeviceSize>((frame_.width() + kTilePx - 1) / kTilePx) *
+           ((frame_.height() + kTilePx - 1) / kTilePx);
   }
 
   vk::Buffer make_texel_buffer(VkDeviceSize bytes, const char* what) {

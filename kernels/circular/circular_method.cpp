@@ -32,7 +32,8 @@ std::vector<CircularKernel> field_kernels(int components, const FilterOptions& o
   const float disc = std::max(1.0f, o.pattern.max_radius_px());
   if (!adaptive(o)) return {make_circular_kernel_for_disc(components, disc)};
   std::vector<CircularKernel> kernels;
-  for (float rho : circular_buckets(disc).disc_radius_px) kernels.push_back(make_circular_kernel_for_disc(components, rho));
+  for (float rho : circular_buckets(disc).disc_radius_px)
+    kernels.push_back(make_circular_kernel_for_disc(components, rho));
   return kernels;
 }
 
@@ -97,7 +98,8 @@ Method circular_method(int components) {
   m.name = m_name(components);
   m.description = std::to_string(components) +
                   "-component circular separable convolution (Garcia 2018): complex-Gaussian horizontal + vertical "
-                  "passes on near/far layers, fixed disc of radius k(N-1)/2";
+                  "passes on near/far layers, fixed disc of radius k(N-1)/2 (adaptive on: a disc of each pixel's "
+                  "own CoC, from kernels 1.5 px apart)";
   m.precisions = {"f32", "f16", "bracketed10"};
   m.samples_pattern = false;
   m.in_default_sweeps = components <= 2;  // 3..6 refine the same algorithm: run them by name
@@ -168,7 +170,8 @@ Method circular_method(int components) {
       const auto tiles = static_cast<std::uint64_t>(tile_count(w, h));
       const int buckets = circular_buckets(std::max(1.0f, o.pattern.max_radius_px())).count();
       const std::uint64_t sum = px * 16, table = kCircularBucketTableBytes;
-      const std::uint64_t tile_bytes = 4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
+      const std::uint64_t tile_bytes =
+          4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
       use.bytes += sum + table + tile_bytes;
       use.details["field_sum_bytes"] = sum;
       use.details["bucket_table_bytes"] = table;

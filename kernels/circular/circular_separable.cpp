@@ -305,7 +305,8 @@ Image circular_convolve(const Image& image, const CircularKernel& kernel, Interm
 
 CircularBuckets circular_buckets(double max_radius_px) {
   if (!(max_radius_px >= 1.0) || !std::isfinite(max_radius_px))
-    throw std::invalid_argument("circular buckets need a finite max radius >= 1 px, got " + std::to_string(max_radius_px));
+    throw std::invalid_argument("circular buckets need a finite max radius >= 1 px, got " +
+                                std::to_string(max_radius_px));
   std::vector<double> radii;
   for (double spacing = kBucketSpacingPx; radii.empty() || static_cast<int>(radii.size()) > kMaxBuckets;
        spacing *= 1.1) {
@@ -321,10 +322,10 @@ CircularBuckets circular_buckets(double max_radius_px) {
   CircularBuckets b;
   double previous = kIdentityRadiusPx;
   for (double rho : radii) {
-    const double span = rho * rho - previous * previous;
+    const double span = rho - previous;
     b.disc_radius_px.push_back(static_cast<float>(rho));
     b.ramp_scale.push_back(static_cast<float>(gain / span));
-    b.ramp_offset.push_back(static_cast<float>(gain * previous * previous / span + (gain - 1) / 2));
+    b.ramp_offset.push_back(static_cast<float>(gain * previous / span + (gain - 1) / 2));
     previous = rho;
   }
   return b;
@@ -332,7 +333,7 @@ CircularBuckets circular_buckets(double max_radius_px) {
 
 float bucket_coordinate(const CircularBuckets& b, float r) {
   float s = 0.0f;
-  for (int k = 0; k < b.count(); ++k) s += std::clamp(r * r * b.ramp_scale[k] - b.ramp_offset[k], 0.0f, 1.0f);
+  for (int k = 0; k < b.count(); ++k) s += std::clamp(r * b.ramp_scale[k] - b.ramp_offset[k], 0.0f, 1.0f);
   return s;
 }
 
@@ -343,7 +344,8 @@ Image circular_blur_adaptive(const Image& color, const Image& radius_px, const I
   check_same_size(color, radius_px, "the CoC radius image");
   check_same_size(color, depth_m, "the depth image");
   if (config.max_radius_px < 1)
-    throw std::invalid_argument("circular blur max radius must be >= 1 px, got " + std::to_string(config.max_radius_px));
+    throw std::invalid_argument("circular blur max radius must be >= 1 px, got " +
+                                std::to_string(config.max_radius_px));
   const CircularBuckets buckets = circular_buckets(config.max_radius_px);
   const int w = color.width, h = color.height, count = buckets.count();
   const float focus = static_cast<float>(focus_distance_m);

@@ -54,28 +54,28 @@ struct CircularFilterConfig {
 // different radius ranges", GDC 2018): discs of radius disc_radius_px[k - 1] for buckets k = 1..K;
 // bucket 0 is the identity (radius kIdentityRadiusPx: the exact scatter keeps a pixel of radius
 // <= 0.5 px in place). The radii step from kMinBucketRadiusPx by kBucketRatio while that is less
-// than kBucketSpacingPx, then by kBucketSpacingPx, stretched so the last is the max radius (22
-// kernels at 40 px); more than kMaxBuckets widen the spacing. So every radius lies within 1 px of a
-// kernel's up to a max radius of about 60 px (Garcia's radius ranges; a disc of radius r, not a
-// blend of two unlike discs: a pair of discs 1.5x apart, mixed half and half, shows as the smaller
-// one with a faint halo).
-// A pixel of radius r gets the bucket coordinate s = sum_k clamp(G (r^2 - rho_(k-1)^2) /
-// (rho_k^2 - rho_(k-1)^2) - (G - 1) / 2, 0, 1) (rho_0 the identity radius, G = 1 / kBucketBlend):
+// than kBucketSpacingPx, then by kBucketSpacingPx, stretched so the last is the max radius (29
+// kernels at 40 px); more than kMaxBuckets widen the spacing (from a max radius of about 43 px).
+// A pixel of radius r gets the bucket coordinate s = sum_k clamp(G (r - rho_(k-1)) /
+// (rho_k - rho_(k-1)) - (G - 1) / 2, 0, 1) (rho_0 the identity radius, G = 1 / kBucketBlend):
 // s = k - 1 + t between rho_(k-1) and rho_k, continuous, t = 0 below the middle kBucketBlend of the
-// interval (in r^2) and 1 above it. Its light goes to buckets floor(s) and floor(s) + 1 with the hat
-// weights max(0, 1 - |s - k|) (1 - t and t): one kernel, the nearer, except in that middle band,
-// where the two mix so the blur grows continuously with the radius. A constant-trip loop, so the GPU
-// evaluates it without divergent loads.
+// interval and 1 above it. Its light goes to buckets floor(s) and floor(s) + 1 with the hat weights
+// max(0, 1 - |s - k|) (1 - t and t): the nearer kernel alone, except in that middle band, where the
+// two mix so the blur grows continuously with the radius. Why not a few kernels far apart, mixed
+// (Garcia's sketch): two discs 1.5x apart mixed half and half show as the smaller disc with a faint
+// halo, not as a disc between them. Here every pixel's light keeps a disc within
+// (1 + kBucketBlend) / 2 steps of its radius: within 0.9 px while the spacing is 1.5 px. A
+// constant-trip loop, so the GPU evaluates it without divergent loads.
 inline constexpr double kBucketRatio = 1.5;
-inline constexpr double kBucketSpacingPx = 2.0;
-inline constexpr double kBucketBlend = 0.25;
+inline constexpr double kBucketSpacingPx = 1.5;
+inline constexpr double kBucketBlend = 0.2;
 inline constexpr double kMinBucketRadiusPx = 1.0;
 inline constexpr float kIdentityRadiusPx = 0.5f;
 inline constexpr int kMaxBuckets = 31;  // bit k of a 32-bit mask per bucket, bit 0 the identity
 struct CircularBuckets {
   std::vector<float> disc_radius_px;  // rho_1 .. rho_K, ascending; rho_K = the max radius
-  std::vector<float> ramp_scale;      // G / (rho_k^2 - rho_(k-1)^2), k = 1..K
-  std::vector<float> ramp_offset;     // G rho_(k-1)^2 / (rho_k^2 - rho_(k-1)^2) + (G - 1) / 2
+  std::vector<float> ramp_scale;      // G / (rho_k - rho_(k-1)), k = 1..K
+  std::vector<float> ramp_offset;     // G rho_(k-1) / (rho_k - rho_(k-1)) + (G - 1) / 2
   int count() const { return static_cast<int>(disc_radius_px.size()); }
 };
 // Throws std::invalid_argument unless max_radius_px >= 1 (and finite).

@@ -29,7 +29,7 @@ layout(std430, binding = 3) writeonly buffer Far { vec4 far_layer[]; };
 layout(std430, binding = 4) writeonly buffer Near { vec4 near_layer[]; };
 // far RGBA, near RGBA maxima; far and near bucket masks (radius-following).
 layout(std430, binding = 5) buffer ChannelMax { uint max_bits[8]; uint bucket_mask[2]; };
-// The ramps of circular_buckets(): s = sum_k clamp(r^2 ramp[k].x - ramp[k].y, 0, 1).
+// The ramps of circular_buckets(): s = sum_k clamp(r ramp[k].x - ramp[k].y, 0, 1).
 layout(std140, binding = 6) uniform Buckets { vec4 ramp[32]; ivec4 reach[32]; } buckets;
 layout(std430, binding = 7) buffer TileState { uint tile_state[]; };  // see tiles.glsl
 
@@ -55,7 +55,7 @@ void main() {
     if (ADAPTIVE) {
       const float r = packed_input[i].a;
       float s = 0.0;
-      for (int k = 0; k < BUCKETS; ++k) s += clamp(r * r * buckets.ramp[k].x - buckets.ramp[k].y, 0.0, 1.0);
+      for (int k = 0; k < BUCKETS; ++k) s += clamp(r * buckets.ramp[k].x - buckets.ramp[k].y, 0.0, 1.0);
       vec4 far_out = vec4(0.0, 0.0, 0.0, NO_BUCKET), near_out = far_out;
       if (s > 0.0) {
         const vec3 rgb = color[i].rgb;

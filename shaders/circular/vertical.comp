@@ -1,8 +1,9 @@
 #version 450
-// Circular separable filter, vertical pass and composite (or, for a bucket of the radius-following
-// filter, the vertical pass added to the field's sum; composite.comp then composites). Per component, V_c = sum_j F_c(j) H_c(x, y + j)
-// (complex products, borders clamp); the blurred layer is b = sum_c A_c Re V_c + B_c Im V_c (A, B
-// already divided by the kernel's normalisation). Then, as circular_blur() on the CPU:
+// Circular separable filter, vertical pass and composite (for a bucket of the radius-following
+// filter: the vertical pass, added to the field's sum over its tiles; composite.comp composites).
+// Per component, V_c = sum_j F_c(j) H_c(x, y + j) (complex products, borders clamp); the blurred
+// layer is b = sum_c A_c Re V_c + B_c Im V_c (A, B already divided by the kernel's normalisation).
+// Then, as circular_blur() on the CPU:
 //   LAYER 0 (far, runs first): out = sharp colour; where the pixel's own far alpha a > 0 and
 //     b.a > 1e-4, out = (1 - a) sharp + a b.rgb / b.a. Writes every output pixel.
 //   LAYER 1 (near, runs last): alpha = clamp(b.a, 0, 1); where alpha > 0,

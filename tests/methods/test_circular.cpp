@@ -335,7 +335,7 @@ TEST(CircularBlur, FarFieldStaysBehindSharpPixelsNearFieldSpreadsOverThem) {
 // ---- Radius-following filter (adaptive on: circular_blur_adaptive) ----
 
 TEST(CircularBuckets, RadiiAndCoordinateFollowTheDefinition) {
-  for (double max_radius : {1.0, 1.3, 6.0, 40.0, 55.0, 160.0}) {
+  for (double max_radius : {1.0, 1.3, 6.0, 40.0, 43.0, 160.0}) {
     const CircularBuckets b = circular_buckets(max_radius);
     ASSERT_GE(b.count(), 1);
     EXPECT_LE(b.count(), kMaxBuckets);
@@ -345,16 +345,18 @@ TEST(CircularBuckets, RadiiAndCoordinateFollowTheDefinition) {
       const double step = b.disc_radius_px[k] - b.disc_radius_px[k - 1];
       EXPECT_GT(step, 0.0);
       EXPECT_LE(b.disc_radius_px[k] / b.disc_radius_px[k - 1], kBucketRatio * 1.2) << max_radius << ", " << k;
-      // Within 1 px of a kernel's radius (steps <= 2 px) up to ~60 px; wider beyond, to fit the masks.
-      if (max_radius <= 55) EXPECT_LE(step, kBucketSpacingPx * 1.2) << max_radius << ", " << k;
+      // Steps of at most 1.5 px (stretched a little) up to ~43 px; wider beyond, to fit the masks.
+      if (max_radius <= 40) {
+        EXPECT_LE(step, kBucketSpacingPx * 1.1) << max_radius << ", " << k;
+      }
     }
-    // s = 0 up to the identity radius, k at rho_k, k - 1/2 in the middle of an interval (in r^2),
+    // s = 0 up to the identity radius, k at rho_k, k - 1/2 in the middle of an interval,
     // exactly k - 1 or k outside its middle band, K from the max radius on.
     EXPECT_EQ(bucket_coordinate(b, 0.0f), 0.0f);
     EXPECT_EQ(bucket_coordinate(b, kIdentityRadiusPx), 0.0f);
     for (int k = 1; k <= b.count(); ++k) {
       const float rho = b.disc_radius_px[k - 1], previous = k > 1 ? b.disc_radius_px[k - 2] : kIdentityRadiusPx;
-      const auto at = [&](double t) { return static_cast<float>(std::sqrt(previous * previous + t * (rho * rho - previous * previous))); };
+      const auto at = [&](double t) { return static_cast<float>(previous + t * (rho - previous)); };
       EXPECT_NEAR(bucket_coordinate(b, rho), k, 1e-4) << "max " << max_radius << ", bucket " << k;
       EXPECT_NEAR(bucket_coordinate(b, at(0.5)), k - 0.5, 1e-4) << "max " << max_radius << ", bucket " << k;
       EXPECT_NEAR(bucket_coordinate(b, at(0.5 - kBucketBlend / 2 - 0.02)), k - 1, 1e-5) << max_radius << ", " << k;
@@ -407,9 +409,8 @@ Image plain_adaptive(const Image& color, const Image& radius, const Image& depth
       }
       if (!any) continue;
       const int n = f == 0 ? config.far_components : config.near_components;
-      const Image blurred =
-          circular_convolve(bucket, make_circular_kernel_for_disc(n, b.disc_radius_px[k - 1]), config.precision, 2,
-                            &field_max[f]);
+      const Image blurred = circular_convolve(bucket, make_circular_kernel_for_disc(n, b.disc_radius_px[k - 1]),
+                                              config.precision, 2, &field_max[f]);
       for (std::size_t i = 0; i < blurred.pixels.size(); ++i) sum[f].pixels[i] += blurred.pixels[i];
     }
   Image out(w, h, 3);
@@ -426,8 +427,10 @@ Image plain_adaptive(const Image& color, const Image& radius, const Image& depth
     const float alpha = std::min(N[3], 1.0f);
     for (int c = 0; c < 3; ++c) {
       float o = color.pixels[3 * i + c];
-      if (near) o = F[c] / std::max(std::max(F[3], 1.0f - alpha), 1e-4f);
-      else if (far && F[3] > 1e-4f) o = F[c] / F[3];
+      if (near)
+        o = F[c] / std::max(std::max(F[3], 1.0f - alpha), 1e-4f);
+      else if (far && F[3] > 1e-4f)
+        o = F[c] / F[3];
       out.pixels[3 * i + c] = N[3] < 1.0f ? (1.0f - alpha) * o + N[c] : N[c] / N[3];
     }
   }
@@ -437,7 +440,8 @@ Image plain_adaptive(const Image& color, const Image& radius, const Image& depth
 // Random radii over every bucket, both fields, and in-focus pixels; windows that reach the borders
 // and windows that do not (a second, sparse image).
 TEST(CircularAdaptive, WindowedBucketsGiveThePlainSumsBits) {
-  for (IntermediatePrecision p : {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10})
+  for (IntermediatePrecision p :
+       {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10})
     for (bool sparse : {false, true}) {
       const int w = 61, h = 47;
       const Image color = random_image(w, h, 3, 0.0f, 3.0f, 5);
@@ -457,16 +461,17 @@ TEST(CircularAdaptive, WindowedBucketsGiveThePlainSumsBits) {
 }
 
 // Point lights of several radii in one image, each spread into a disc of its own radius (+-1 px,
-// the bound; measured within 0.7 px, printed): near lights over an in-focus black backdrop,
-// far lights over a black far backdrop of 2 px. The radii include kernel radii, the middle of an
-// interval (the two kernels mixed half and half: the worst case) and the ends of a middle band.
+// the bound; printed): near lights over an in-focus black backdrop, far lights over a black
+// far backdrop of 2 px. The radii include kernel radii, the middle of an interval (two kernels
+// mixed half and half) and a point in the mixing band where the outer kernel's weight is about 0.7
+// (its visible edge still the inner one's: the worst case, about 0.6 steps from the inner radius).
 std::vector<float> test_radii(const CircularBuckets& b) {
   std::vector<float> radii;
   for (int k : {2, 5, 9, 13, b.count()}) {
     if (k > b.count()) continue;
     const float rho = b.disc_radius_px[k - 1], previous = k > 1 ? b.disc_radius_px[k - 2] : kIdentityRadiusPx;
-    const auto at = [&](double t) { return static_cast<float>(std::sqrt(previous * previous + t * (rho * rho - previous * previous))); };
-    for (double t : {0.5, 0.5 + kBucketBlend / 2, 1.0}) radii.push_back(at(t));
+    const auto at = [&](double t) { return static_cast<float>(previous + t * (rho - previous)); };
+    for (double t : {0.5, 0.5 + 0.3 * kBucketBlend, 1.0}) radii.push_back(at(t));
   }
   return radii;
 }
@@ -476,7 +481,8 @@ TEST(CircularAdaptive, PointLightsMakeDiscsOfTheirOwnRadii) {
   const std::vector<float> radii = test_radii(circular_buckets(max_radius));
   for (int n : {1, 2, 3, 6})
     for (bool near : {true, false}) {
-      const int cell = 2 * 56, w = cell * static_cast<int>(radii.size()), h = cell;  // > 2 kernel radii (1 component: 51)
+      const int cell = 2 * 56, w = cell * static_cast<int>(radii.size()),
+                h = cell;  // > 2 kernel radii (1 component: 51)
       Image color(w, h, 3), radius(w, h, 1, near ? 0.0f : 2.0f), depth(w, h, 1, near ? 3.0f : 10.0f);
       for (std::size_t i = 0; i < radii.size(); ++i) {
         const int cx = static_cast<int>(i) * cell + cell / 2, cy = h / 2;
@@ -484,7 +490,8 @@ TEST(CircularAdaptive, PointLightsMakeDiscsOfTheirOwnRadii) {
         *radius.px(cx, cy) = radii[i];
         *depth.px(cx, cy) = near ? 1.0f : 10.0f;
       }
-      const Image out = circular_blur_adaptive(color, radius, depth, kFocus_m, {n, n, max_radius, IntermediatePrecision::f32, true});
+      const Image out =
+          circular_blur_adaptive(color, radius, depth, kFocus_m, {n, n, max_radius, IntermediatePrecision::f32, true});
       for (std::size_t i = 0; i < radii.size(); ++i) {
         const int cx = static_cast<int>(i) * cell + cell / 2, cy = h / 2;
         const double measured = half_plateau_radius(out, 0, cx, cy, radii[i]);
@@ -496,8 +503,10 @@ TEST(CircularAdaptive, PointLightsMakeDiscsOfTheirOwnRadii) {
         // summing to one. Far: F / F.a, normalised by the far coverage as the depth-ordered
         // reference fills what nearer pixels hide, and the light's own pixel is a hole in the
         // backdrop's coverage: that moves a small disc (13% at 1.3 px), <= 0.6% from 4 px on.
-        if (near || radii[i] >= 4.0f)
-          EXPECT_NEAR(energy / 100.0, 1.0, near ? 1e-4 : 1e-2) << n << " components, " << (near ? "near" : "far") << ", r " << radii[i];
+        if (near || radii[i] >= 4.0f) {
+          EXPECT_NEAR(energy / 100.0, 1.0, near ? 1e-4 : 1e-2)
+              << n << " components, " << (near ? "near" : "far") << ", r " << radii[i];
+        }
         std::printf("[adaptive disc] %d components %s: r %.2f px, measured %.3f px, energy %.5f\n", n,
                     near ? "near" : "far", radii[i], measured, energy / 100.0);
       }
@@ -507,7 +516,8 @@ TEST(CircularAdaptive, PointLightsMakeDiscsOfTheirOwnRadii) {
 TEST(CircularAdaptive, RadiusZeroIsTheIdentity) {
   const LayeredScene s = layered_scene(40, 30, 0.0f, 1.0f);
   for (float r : {0.0f, 0.25f, kIdentityRadiusPx})
-    for (IntermediatePrecision p : {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
+    for (IntermediatePrecision p :
+         {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
       const Image radius(40, 30, 1, r);
       const Image out = circular_blur_adaptive(s.color, radius, s.depth_m, kFocus_m, {1, 2, 8, p, true});
       EXPECT_EQ(out.pixels, s.color.pixels) << "r " << r << " " << to_string(p);
@@ -526,7 +536,8 @@ TEST(CircularAdaptive, ConstantRadiusKeepsTheEnergy) {
   const Image depth(w, h, 1, 10.0f);
   for (float r : {0.8f, 4.0f, 6.3f, 16.0f}) {
     const Image radius(w, h, 1, r);
-    const Image out = circular_blur_adaptive(color, radius, depth, kFocus_m, {2, 2, 16, IntermediatePrecision::f32, true});
+    const Image out =
+        circular_blur_adaptive(color, radius, depth, kFocus_m, {2, 2, 16, IntermediatePrecision::f32, true});
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(channel_sum(out, c) / channel_sum(color, c), 1.0, 1e-5) << "r " << r;
   }
 }
@@ -552,9 +563,9 @@ TEST(CircularAdaptive, TilesCoverEachBucketsReach) {
   const AdaptiveWork one = adaptive_tiles(far_layer, near_layer, b, radii, components);
   const int K = b.count();
   EXPECT_EQ(one.bucket_mask[0], 1u << K);
-  EXPECT_EQ(one.horizontal_tiles[0][K - 1], 5);              // tiles 1..5 of row 2
-  EXPECT_EQ(one.vertical_tiles[0][K - 1], 5 * 5);            // rows 0..4
-  EXPECT_EQ(one.zero_tiles[0][K - 1], 5 * 5 - 5);            // rows 0..4 (2 +- 4, clamped), less row 2
+  EXPECT_EQ(one.horizontal_tiles[0][K - 1], 5);    // tiles 1..5 of row 2
+  EXPECT_EQ(one.vertical_tiles[0][K - 1], 5 * 5);  // rows 0..4
+  EXPECT_EQ(one.zero_tiles[0][K - 1], 5 * 5 - 5);  // rows 0..4 (2 +- 4, clamped), less row 2
   for (int k = 1; k < K; ++k) EXPECT_EQ(one.vertical_tiles[0][k - 1], 0) << k;
 }
 
