@@ -116,8 +116,14 @@ Method circular_method(int components) {
     needs.subgroup_arithmetic = true;  // the layers pass reduces channel maxima with subgroupMax
     return needs;
   };
-  m.unsupported = [](const FilterOptions& o, int, int) -> std::string {
+  m.unsupported = [](const FilterOptions& o, int w, int h) -> std::string {
     if (o.pattern.max_radius_px() < 1.0f) return "circular filters need a max radius k (N - 1) / 2 >= 1 px";
+    // A bucket's pass dispatches one workgroup column per listed tile: at most every tile, which
+    // must stay within the 65535 workgroups every device accepts along x (8192 x 8192 does not).
+    if (adaptive(o) && tile_count(w, h) > 65535)
+      return fmt::format("adaptive on lists up to {} tiles of {} px a pass, over the 65535 workgroups a dispatch may "
+                         "count (an image up to about 8000 x 8000 fits)",
+                         tile_count(w, h), kTilePx);
     return "";
   };
   m.cpu_reference = [components](const CpuInput& in) {

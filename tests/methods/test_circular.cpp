@@ -14,6 +14,7 @@
 
 #include "circular_coefficients.hpp"
 #include "circular_separable.hpp"
+#include "method.hpp"
 #include "test_support.hpp"
 
 namespace bokeh {
@@ -567,6 +568,25 @@ TEST(CircularAdaptive, TilesCoverEachBucketsReach) {
   EXPECT_EQ(one.vertical_tiles[0][K - 1], 5 * 5);  // rows 0..4
   EXPECT_EQ(one.zero_tiles[0][K - 1], 5 * 5 - 5);  // rows 0..4 (2 +- 4, clamped), less row 2
   for (int k = 1; k < K; ++k) EXPECT_EQ(one.vertical_tiles[0][k - 1], 0) << k;
+}
+
+// What the declaration says of adaptive on: its tile lists' dispatch limit, and its models.
+TEST(CircularAdaptive, DeclarationCoversTheMode) {
+  const Method& m = find_method("circular2");
+  FilterOptions on = m.defaults({41, 2}), off = on;
+  on.values["adaptive"] = 1;
+  EXPECT_EQ(m.option("adaptive")->choices, (std::vector<std::string>{"off", "on"}));
+  EXPECT_EQ(m.options_json(on)["adaptive"], "on");
+  EXPECT_EQ(m.unsupported(on, 1920, 1080), "");
+  EXPECT_EQ(m.unsupported(off, 16384, 16384), "");
+  EXPECT_NE(m.unsupported(on, 16384, 16384), "");
+  // Passes: the fixed kernel's four against the buckets' three; the bound covers every bucket.
+  std::vector<std::string> passes;
+  for (const PassWork& p : m.work(on, 800, 600)) passes.push_back(p.pass);
+  EXPECT_EQ(passes, (std::vector<std::string>{"layers", "tiles", "far", "near"}));
+  EXPECT_GT(m.gpu_memory(on, 800, 600, nullptr).bytes, m.gpu_memory(off, 800, 600, nullptr).bytes);
+  EXPECT_GE(m.gpu_tolerance(on), m.gpu_tolerance(off));
+  EXPECT_EQ(m.storage_tolerance(on), 0.0);  // f32
 }
 
 TEST(CircularCost, CountsTapsAndIntermediateBytes) {
