@@ -50,6 +50,24 @@ std::vector<std::string> adaptive_methods() {
 
 double median_ms(const nlohmann::json& point) { return point["frame_ms"]["median"].get<double>(); }
 
+// off / on of the samples the two points took in the same round: the machine's drift (a shared VM
+// moves by 2x within minutes) cancels in each ratio. Their median and quartiles.
+nlohmann::json paired_ratios(const nlohmann::json& off, const nlohmann::json& on) {
+  std::map<int, double> off_by_round;
+  for (std::size_t i = 0; i < off["samples_ms"].size(); ++i)
+    off_by_round[off["sample_rounds"][i].get<int>()] = off["samples_ms"][i].get<double>();
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < on["samples_ms"].size(); ++i)
+    if (auto it = off_by_round.find(on["sample_rounds"][i].get<int>());
+        it != off_by_round.end() && on["samples_ms"][i].get<double>() > 0)
+      ratios.push_back(it->second / on["samples_ms"][i].get<double>());
+  if (ratios.empty()) return nullptr;
+  return {{"median", runner::quantile(ratios, 0.5)},
+          {"q1", runner::quantile(ratios, 0.25)},
+          {"q3", runner::quantile(ratios, 0.75)},
+          {"rounds", ratios.size()}};
+}
+
 nlohmann::json error_summary(const nlohmann::json& point) {
   const auto& e = point["error"]["vs_energy_sum"];
   return {{"psnr_db", e["psnr_db"]}, {"rmse", e["rmse"]}, {"max_abs_error", e["max_abs_error"]}};
@@ -89,6 +107,7 @@ nlohmann::json comparisons_json(const nlohmann::json& points) {
         {"frame_ms_off", median_ms(w)},
         {"frame_ms_on", median_ms(on)},
         {"speedup", median_ms(on) > 0 ? median_ms(w) / median_ms(on) : 0.0},
+        {"speedup_same_round", paired_ratios(w, on)},
         {"allocated_bytes_off", off_bytes},
         {"allocated_bytes_on", on_bytes},
         {"memory_saved_bytes", static_cast<double>(off_bytes) - static_cast<double>(on_bytes)},
@@ -157,13 +176,19 @@ void adaptive(AdaptiveOptions& o) {
               {"error", "each mode against the exact energy-sum scatter of the same scene and CoC"}};
   s.derive = [](nlohmann::json& doc) { doc["comparisons"] = comparisons_json(doc["points"]); };
   s.summary = [](const nlohmann::json& doc) {
-    fmt::print("\n{:<18} {:>7} {:<8} {:>9} {:>9} {:>8} {:>12} {:>12} {:>8} {:>10} {:>10}\n", "scene", "max CoC",
-               "method", "off ms", "on ms", "speed-up", "off alloc", "on alloc", "saved", "PSNR off", "PSNR on");
+    fmt::print("\n{:<18} {:>7} {:<8} {:>9} {:>9} {:>8} {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n", "scene",
+               "max CoC", "method", "off ms", "on ms", "speed-up", "(same round, IQR)", "off alloc", "on alloc", "saved",
+               "PSNR off", "PSNR on");
     for (const auto& c : doc["comparisons"]) {
       const auto& saved = c["memory_saved_fraction"];
-      fmt::print("{:<18} {:>5.0f}px {:<8} {:>9.2f} {:>9.2f} {:>7.2f}x {:>12} {:>12} {:>8} {:>10} {:>10}\n",
+      const auto& paired = c["speedup_same_round"];
+      const std::string same_round =
+          paired.is_null() ? std::string("-")
+                           : fmt::format("{:.2f}x [{:.2f}-{:.2f}]", paired["median"].get<double>(),
+                                         paired["q1"].get<double>(), paired["q3"].get<double>());
+      fmt::print("{:<18} {:>5.0f}px {:<8} {:>9.2f} {:>9.2f} {:>7.2f}x {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n",
                  c["scene"].get<std::string>(), c["max_coc_px"].get<double>(), c["method"].get<std::string>(),
-                 c["frame_ms_off"].get<double>(), c["frame_ms_on"].get<double>(), c["speedup"].get<double>(),
+                 c["frame_ms_off"].get<double>(), c["frame_ms_on"].get<double>(), c["speedup"].get<double>(), same_round,
                  mib_text(c["allocated_bytes_off"].get<double>()), mib_text(c["allocated_bytes_on"].get<double>()),
                  saved.is_null() ? std::string("-") : fmt::format("{:.0f}%", 100 * saved.get<double>()),
                  psnr_text(c["error_off"]), psnr_text(c["error_on"]));

@@ -45,14 +45,16 @@ void main() {
   }
   const int pixel_rows = min(isqrt(pixel_reach), LAYERS - 1);
 #else
-  const int rows = n, pixel_rows = n;
+  const int rows = n;
 #endif
 #if BRACKETED
   const uint h = uint(bracket_bits.length()) / 2u;
 #endif
   vec3 sum = vec3(0.0);
   for (int j = -rows; j <= rows; ++j) {
-    if (abs(j) > pixel_rows) continue;
+#if ADAPTIVE
+    if (abs(j) > pixel_rows) continue;  // 0 there: no source reaching this pixel reaches that layer
+#endif
     const int sy = p.y + j * k;
     if (sy < 0 || sy >= params.height_px) continue;
     const vec3 q = imageLoad(layers, ivec3(p.x, sy, abs(j))).rgb;
