@@ -17,8 +17,9 @@ bool adaptive_on(const FilterOptions& options) {
 OptionSpec adaptive_tile_option() {
   return {"adaptive_tile_px",
           "adaptive = on: side of the tile-max CoC map's tiles in px (of the grid the passes run on). Smaller tiles "
-          "follow the CoC more closely but cost more map work; multiples of 8 match the 8 x 8 workgroups, whose "
-          "loop bounds come from the tiles they cover",
+          "follow the CoC more closely but cost more map work (tile_reach visits ~(2 n k / tile + 3)^2 tiles each); "
+          "the lanes of a subgroup share the largest bound of their pixels' tiles, so tiles much smaller than a "
+          "subgroup's pixels gain little (lavapipe, 800x600: 8 and 16 alike, 32 slower)",
           16, 4, 128, true, {}};
 }
 
