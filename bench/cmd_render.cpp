@@ -186,7 +186,7 @@ void render(RenderOptions& o) {
 void add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* cmd = app.add_subcommand("render", "Render one image with one method");
-  auto* scene = cmd->add_option("--scene", o->scene_name, "Procedural scene: hoops, pillars, points")
+  auto* scene = cmd->add_option("--scene", o->scene_name, "Procedural scene")
                     ->check(CLI::IsMember(procedural_scene_names()));
   auto* color = cmd->add_option("--color", o->color_path, "Colour image (linear RGB, e.g. EXR)")->check(CLI::ExistingFile);
   auto* depth = cmd->add_option("--depth", o->depth_path, "Depth image: planar view-space depth in metres, channel 0")

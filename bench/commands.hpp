@@ -61,5 +61,6 @@ void add_tradeoff_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_selftest_compare_command(CLI::App& app);
 void add_stability_command(CLI::App& app);
+void add_adaptive_command(CLI::App& app);
 
 }  // namespace bokeh

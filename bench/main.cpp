@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   bokeh::add_tradeoff_command(app);
   bokeh::add_memory_command(app);
   bokeh::add_buffers_command(app);
+  bokeh::add_adaptive_command(app);
   bokeh::add_render_command(app);
   bokeh::add_stability_command(app);
   bokeh::add_devices_command(app);

@@ -72,10 +72,15 @@ std::vector<std::map<std::string, double>> option_sets(const Method& m, const Ax
   std::vector<std::map<std::string, double>> sets = {{}};
   for (const auto& spec : m.options) {
     std::vector<double> values = {spec.default_value};
-    if (auto it = axes.option_values.find(spec.key); it != axes.option_values.end())
+    const auto& swept = axes.sweep_choices;
+    if (auto it = axes.option_values.find(spec.key); it != axes.option_values.end()) {
       values = {it->second};
-    else if (axes.sweep_options && !spec.tradeoff.empty())
+    } else if (!spec.choices.empty() && std::find(swept.begin(), swept.end(), spec.key) != swept.end()) {
+      values.clear();
+      for (std::size_t c = 0; c < spec.choices.size(); ++c) values.push_back(static_cast<double>(c));
+    } else if (axes.sweep_options && !spec.tradeoff.empty()) {
       values = spec.tradeoff;
+    }
     std::vector<std::map<std::string, double>> next;
     for (const auto& set : sets)
       for (double v : values) {
@@ -93,6 +98,7 @@ std::string point_id(const SweepPoint& p) {
   std::string id = fmt::format("{}/{}/{}/{}/N:{}/k:{}/{}", p.method->name, p.backend, p.scene, p.resolution.text(),
                                o.pattern.size_n, o.pattern.spacing_px, o.precision);
   if (o.buffer_scale != 1) id += fmt::format("/scale:1-{}", o.buffer_scale);
+  if (p.max_coc_px != o.pattern.max_radius_px()) id += fmt::format("/coc:{}", p.max_coc_px);
   for (const auto& spec : p.method->options) {
     const double v = o.number(spec.key);
     if (v != spec.default_value) id += fmt::format("/{}:{}", spec.key, spec.to_json(v).dump());
@@ -162,6 +168,7 @@ class GpuTarget final : public runner::Target {
   }
   Image output() { return frame_.read_output(); }
   // One frame with the per-pass counters on (outside the timed samples).
+  std::uint64_t intermediate_bytes() const { return filter_->intermediate_bytes(); }
   std::vector<vk::PassTime> counted_frame() {
     timer_.count_invocations(true);
     auto passes = gpu::run_frames(frame_, *filter_, timer_, 1);
@@ -452,6 +459,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
         info[i].counters[pass.pass] = {{"commands", pass.commands}};
         if (pass.invocations >= 0) info[i].counters[pass.pass]["compute_invocations"] = pass.invocations;
       }
+      // What the filter allocated for this scene (bytes above is the model, which budgets use).
+      info[i].memory["allocated_bytes"] = g->intermediate_bytes();
       first_ready(i, g->output(), g->stats());
     }
     if (auto* c = dynamic_cast<CpuTarget*>(&t)) first_ready(i, c->output(), c->stats());

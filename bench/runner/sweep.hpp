@@ -41,9 +41,12 @@ struct Axes {
   std::map<std::string, double> option_values;
   // Also sweep each option's `tradeoff` values (tradeoff).
   bool sweep_options = false;
+  // Options (by key) swept over every one of their choices where a method has them as an
+  // enumeration and option_values does not fix them (adaptive: off and on).
+  std::vector<std::string> sweep_choices;
   // The scene's largest CoC radius: unset = the pattern's max radius (the lens follows N, as in
   // figure9), else this many px for every point.
-  std::optional<double> max_coc_px;
+  std::optional<double> max_coc_px;  // a point id names it (/coc:R) when it differs from the pattern's
 };
 
 struct SweepPoint {

@@ -240,70 +240,64 @@ void download(Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes) {
   std::memcpy(data, staging.mapped(), bytes);
 }
 
+namespace {
+
+// Device memory for `image` (small images share blocks), bound; returns the driver's size.
+VkDeviceSize allocate_and_bind(Context& ctx, VkImage image, Allocation& memory) {
+  VkMemoryRequirements req{};
+  vkGetImageMemoryRequirements(ctx.device(), image, &req);
+  memory = Allocation(ctx, req, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0),
+                      Allocation::Kind::image, false);
+  VK_CHECK(vkBindImageMemory(ctx.device(), image, memory.memory(), memory.offset()));
+  return req.size;
+}
+
+constexpr VkImageSubresourceRange kColorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+
+Handle<VkImageView> make_view(Context& ctx, VkImage image, VkImageViewType type, VkFormat format) {
+  VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  view_info.image = image;
+  view_info.viewType = type;
+  view_info.format = format;
+  view_info.subresourceRange = kColorRange;
+  VkImageView view = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateImageView(ctx.device(), &view_info, nullptr, &view));
+  return {view, [d = ctx.device()](VkImageView v) { vkDestroyImageView(d, v, nullptr); }};
+}
+
+// From UNDEFINED into the layout the image rests in between passes; its contents stay undefined
+// until a pass or a copy writes them.
+void initial_layout(Context& ctx, VkImage image, VkImageLayout layout, VkPipelineStageFlags stage, VkAccessFlags access) {
+  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    barrier.dstAccessMask = access;
+    barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    barrier.newLayout = layout;
+    barrier.srcQueueFamilyIndex = barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    barrier.image = image;
+    barrier.subresourceRange = kColorRange;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, stage, 0, 0, nullptr, 0, nullptr, 1, &barrier);
+  });
+}
+
+}  // namespace
+
 StorageImage3D::StorageImage3D(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height,
                                std::uint32_t depth) {
   image_ = create_image_3d(ctx, format, width, height, depth);
-  VkMemoryRequirements req{};
-  vkGetImageMemoryRequirements(ctx.device(), image_, &req);
-  allocated_bytes_ = req.size;
-  memory_ = Allocation(ctx, req, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0),
-                       Allocation::Kind::image, false);
-  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_.memory(), memory_.offset()));
-
-  VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  view_info.image = image_;
-  view_info.viewType = VK_IMAGE_VIEW_TYPE_3D;
-  view_info.format = format;
-  view_info.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  VkImageView view = VK_NULL_HANDLE;
-  VK_CHECK(vkCreateImageView(ctx.device(), &view_info, nullptr, &view));
-  view_ = Handle<VkImageView>(view, [d = ctx.device()](VkImageView v) { vkDestroyImageView(d, v, nullptr); });
-
-  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    barrier.srcAccessMask = 0;
-    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-    barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    barrier.newLayout = VK_IMAGE_LAYOUT_GENERAL;
-    barrier.srcQueueFamilyIndex = barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    barrier.image = image_;
-    barrier.subresourceRange = view_info.subresourceRange;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0,
-                         nullptr, 1, &barrier);
-  });
+  allocated_bytes_ = allocate_and_bind(ctx, image_, memory_);
+  view_ = make_view(ctx, image_, VK_IMAGE_VIEW_TYPE_3D, format);
+  initial_layout(ctx, image_, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
 }
 
 ColorTarget::ColorTarget(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height)
     : format_(format), width_(width), height_(height) {
   image_ = create_image(ctx, color_target_info(format, width, height));
-  VkMemoryRequirements req{};
-  vkGetImageMemoryRequirements(ctx.device(), image_, &req);
-  allocated_bytes_ = req.size;
-  memory_ = Allocation(ctx, req, ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0),
-                       Allocation::Kind::image, false);
-  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_.memory(), memory_.offset()));
-
-  VkImageViewCreateInfo view_info{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  view_info.image = image_;
-  view_info.viewType = VK_IMAGE_VIEW_TYPE_2D;
-  view_info.format = format;
-  view_info.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  VkImageView view = VK_NULL_HANDLE;
-  VK_CHECK(vkCreateImageView(ctx.device(), &view_info, nullptr, &view));
-  view_ = Handle<VkImageView>(view, [d = ctx.device()](VkImageView v) { vkDestroyImageView(d, v, nullptr); });
-
-  // Into the layout it rests in between passes; the contents stay undefined until a copy fills them.
-  ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-    VkImageMemoryBarrier barrier{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    barrier.dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-    barrier.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    barrier.newLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    barrier.srcQueueFamilyIndex = barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    barrier.image = image_;
-    barrier.subresourceRange = view_info.subresourceRange;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0,
-                         nullptr, 0, nullptr, 1, &barrier);
-  });
+  allocated_bytes_ = allocate_and_bind(ctx, image_, memory_);
+  view_ = make_view(ctx, image_, VK_IMAGE_VIEW_TYPE_2D, format);
+  initial_layout(ctx, image_, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                 VK_ACCESS_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
 }
 
 VkDeviceSize color_target_requirement_bytes(Context& ctx, VkFormat format, std::uint32_t width, std::uint32_t height) {

@@ -111,6 +111,72 @@ Scene points(int w, int h) {
   return s;
 }
 
+// A textured surface at (about) the focal plane: fine detail a blur would wipe out, with small
+// highlights, depth within 0.5% of the focus distance (radii under a pixel at any usual f-stop).
+void in_focus_wall(Scene& s, int x0, int x1, int salt) {
+  const float focus = static_cast<float>(s.lens.focus_distance_m);
+  for (int y = 0; y < s.color.height; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const bool cell = ((x / 6) + (y / 6)) % 2 == 0;
+      const float n = 0.15f * hash01(x, y, salt);
+      const float depth = focus * (1.0f + 0.005f * (2.0f * hash01(x / 32, y / 32, salt + 1) - 1.0f));
+      put(s, x, y, depth, (cell ? 0.55f : 0.25f) + n, (cell ? 0.45f : 0.22f) + n, (cell ? 0.30f : 0.35f) + n);
+      if (hash01(x, y, salt + 2) < 0.002f) put(s, x, y, depth, 8.0f, 7.0f, 5.0f);
+    }
+}
+
+// Distant lights: a dark far field with bright highlights (bokeh discs when defocused).
+void far_lights(Scene& s, int x0, int x1, int y0, int y1, float depth_m, float density, int salt) {
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const float t = static_cast<float>(y) / s.color.height;
+      put(s, x, y, depth_m, 0.05f + 0.08f * t, 0.06f + 0.05f * t, 0.12f);
+      if (hash01(x, y, salt) < density) {
+        const float hue = hash01(x, y, salt + 1);
+        put(s, x, y, depth_m, 30.0f * (0.6f + 0.4f * hue), 24.0f, 30.0f * (1.0f - 0.4f * hue));
+      }
+    }
+}
+
+// A near, defocused blob (a leaf or a railing in front of the lens) centred at (cx, cy), radius in px.
+void near_blob(Scene& s, float cx, float cy, float radius_px, float depth_m, int salt) {
+  for (int y = std::max(0, static_cast<int>(cy - radius_px)); y <= std::min(s.color.height - 1, static_cast<int>(cy + radius_px)); ++y)
+    for (int x = std::max(0, static_cast<int>(cx - radius_px)); x <= std::min(s.color.width - 1, static_cast<int>(cx + radius_px)); ++x) {
+      if (std::hypot(x - cx, y - cy) > radius_px) continue;
+      const float n = 0.1f * hash01(x, y, salt);
+      put(s, x, y, depth_m, 0.15f + n, 0.45f + n, 0.12f);
+    }
+}
+
+// Most of the frame on the focal plane: a textured wall at 3 m covering all but a corner, where
+// distant lights (30 m) show through, and one small near blob (1.2 m): about a tenth defocused.
+Scene mostly_in_focus(int w, int h) {
+  Scene s = blank("mostly_in_focus", w, h);
+  in_focus_wall(s, 0, w, 41);
+  far_lights(s, w - w / 4, w, 0, h / 3, 30.0f, 0.004f, 43);
+  near_blob(s, 0.12f * w, 0.85f * h, 0.06f * std::min(w, h), 1.2f, 47);
+  return s;
+}
+
+// The left half on the focal plane, the right half a field of distant lights (25 m) with a near
+// blob (1.5 m) straddling the edge.
+Scene half_defocused(int w, int h) {
+  Scene s = blank("half_defocused", w, h);
+  in_focus_wall(s, 0, w / 2, 51);
+  far_lights(s, w / 2, w, 0, h, 25.0f, 0.004f, 53);
+  near_blob(s, 0.5f * w, 0.3f * h, 0.08f * std::min(w, h), 1.5f, 57);
+  return s;
+}
+
+// Nothing on the focal plane: distant lights (40 m) everywhere, near blobs (1 m, 1.4 m) in front.
+Scene fully_defocused(int w, int h) {
+  Scene s = blank("fully_defocused", w, h);
+  far_lights(s, 0, w, 0, h, 40.0f, 0.004f, 61);
+  near_blob(s, 0.25f * w, 0.7f * h, 0.12f * std::min(w, h), 1.0f, 67);
+  near_blob(s, 0.7f * w, 0.35f * h, 0.08f * std::min(w, h), 1.4f, 71);
+  return s;
+}
+
 }  // namespace
 
 std::vector<PointLight> point_lights(int w, int h) {
@@ -124,7 +190,8 @@ std::vector<PointLight> point_lights(int w, int h) {
 }
 
 const std::vector<std::string>& procedural_scene_names() {
-  static const std::vector<std::string> names = {"hoops", "pillars", "points"};
+  static const std::vector<std::string> names = {"hoops", "pillars", "points", "mostly_in_focus", "half_defocused",
+                                                  "fully_defocused"};
   return names;
 }
 
@@ -134,7 +201,12 @@ Scene make_scene(const std::string& name, int w, int h) {
   if (name == "hoops") return hoops(w, h);
   if (name == "pillars") return pillars(w, h);
   if (name == "points") return points(w, h);
-  throw std::invalid_argument(fmt::format("unknown scene '{}' (expected hoops, pillars or points)", name));
+  if (name == "mostly_in_focus") return mostly_in_focus(w, h);
+  if (name == "half_defocused") return half_defocused(w, h);
+  if (name == "fully_defocused") return fully_defocused(w, h);
+  std::string known;
+  for (const auto& n : procedural_scene_names()) known += (known.empty() ? "" : ", ") + n;
+  throw std::invalid_argument(fmt::format("unknown scene '{}' (expected one of {})", name, known));
 }
 
 Scene load_scene(const std::string& color_path, const std::string& depth_path) {

@@ -23,7 +23,9 @@ struct PointLight {
   float radiance;
 };
 
-const std::vector<std::string>& procedural_scene_names();  // hoops, pillars, points
+// hoops, pillars, points; and, for the adaptive gathers, scenes that span the share of the frame out
+// of focus: mostly_in_focus (about a tenth defocused), half_defocused, fully_defocused.
+const std::vector<std::string>& procedural_scene_names();
 // Throws std::invalid_argument for unknown names or sizes under 16x16.
 Scene make_scene(const std::string& name, int width_px, int height_px);
 // The lights `points` places at this resolution (exposed so tests can check disc size and position).

@@ -17,13 +17,21 @@
 // into a ceil(L/s)-layer buffer, and "upsample" adds the bilinear low-res result to the sharp part of
 // each full-res pixel. Passes, each timed: downsample (s > 1), bracket (bracketed), horizontal,
 // vertical, upsample (s > 1).
+//
+// adaptive = on (coc_tiles_gpu.hpp, kernels/core/coc_tiles.hpp): when the filter is made, the CoC
+// pass, the downsample and the tile-max CoC map run once and the scene's largest disc index on FLAG's
+// grid comes back (4 bytes): the 3D buffer gets the layers that disc reaches, not ceil(N/2). Every
+// frame then computes the tile map (tile_max, tile_reach, tile_layers) before the FLAG passes, which
+// bound their row samples, the layers they write and the rows they sum by it; tiles nothing blurred
+// reaches pass their input through (shaders/flag/horizontal.comp, vertical.comp).
 #include <cstdint>
 #include <optional>
 #include <span>
 #include <stdexcept>
 
-#include "flag_reduced.hpp"
+#include "coc_tiles_gpu.hpp"
 #include "flag_gpu.hpp"
+#include "flag_reduced.hpp"
 #include "vk/spirv.hpp"
 
 namespace bokeh {
@@ -85,16 +93,8 @@ class Flag final : public gpu::GpuFilter {
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
         outputs_(flag_horizontal_block(options, frame.ctx.info())),
-        layers_(frame.ctx, layer_format(precision), low_width_, low_height_,
-                static_cast<std::uint32_t>(pattern_.layers())),
-        horizontal_(frame.ctx, vk::spirv(std::string("flag/horizontal_") + to_string(precision)),
-                    is_bracketed(precision) ? std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}
-                                            : std::vector<VkDescriptorType>{kBuffer, kImage},
-                    sizeof(PassParams), {pattern_.layers(), kBracketChunk, pattern_.spacing_px, outputs_}),
-        vertical_(frame.ctx, vk::spirv(std::string("flag/vertical_") + to_string(precision)),
-                  is_bracketed(precision) ? std::vector<VkDescriptorType>{kImage, kBuffer, kBuffer}
-                                          : std::vector<VkDescriptorType>{kImage, kBuffer},
-                  sizeof(PassParams), {pattern_.layers()}) {
+        tile_px_(adaptive_on(options) ? adaptive_tile_px(options) : 0),
+        layer_count_(pattern_.layers()) {
     check_colour(frame, precision);
     const vk::Buffer* flag_input = &frame.packed;
     const vk::Buffer* flag_output = &frame.output;
@@ -122,36 +122,86 @@ class Flag final : public gpu::GpuFilter {
       flag_input = &*packed_low_;
       flag_output = &*output_low_;
     }
-    horizontal_.bind(0, *flag_input);
-    horizontal_.bind(1, layers_);
-    vertical_.bind(0, layers_);
-    vertical_.bind(1, *flag_output);
-    if (is_bracketed(precision)) {
+    const bool bracketed = is_bracketed(precision);
+    std::uint32_t extent_x = low_width_, extent_y = low_height_;
+    if (tile_px_ > 0) {
+      tiles_.emplace(frame.ctx, *flag_input, low_width_, low_height_, pattern_.spacing_px, tile_px_);
+      // The scene's largest disc on FLAG's grid, reduced on the GPU when the run is prepared (CoC,
+      // downsample and tile passes once, outside the timed frames); one int comes back. It sizes the
+      // layers: n' = min(isqrt(m), n). A scene with no blur at all stores no layer: every tile passes
+      // its input through, so the image is a placeholder of one texel.
+      frame.ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+        frame.coc_pass.dispatch(cmd, &frame.params, frame.width(), frame.height());
+        const PassParams grid = grid_params(frame.params);
+        if (downsample_) downsample_->dispatch(cmd, &grid, low_width_, low_height_);
+        tiles_->record(cmd, nullptr, grid);
+      });
+      scene_max_index_ = tiles_->read_scene_max_index();
+      layer_count_ = scene_sized_pattern(pattern_, scene_max_index_).layers();
+      if (scene_max_index_ == 0) extent_x = extent_y = 1;
+      tile_layers_.emplace(frame.ctx, vk::spirv("flag/tile_layers"), std::vector<VkDescriptorType>{kBuffer},
+                           sizeof(PassParams), std::vector<std::int32_t>{pattern_.spacing_px, tile_px_});
+      tile_layers_->bind(0, tiles_->buffer());
+    }
+    const std::string variant = std::string(tile_px_ > 0 ? "_adaptive_" : "_") + to_string(precision);
+    std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px, outputs_};
+    std::vector<std::int32_t> vertical_constants = {layer_count_};
+    std::vector<VkDescriptorType> horizontal_bindings = {kBuffer, kImage}, vertical_bindings = {kImage, kBuffer};
+    if (bracketed) horizontal_bindings.push_back(kBuffer), vertical_bindings.push_back(kBuffer);
+    if (tile_px_ > 0) {
+      horizontal_constants.push_back(tile_px_);
+      vertical_constants.push_back(tile_px_);
+      horizontal_bindings.push_back(kBuffer);                 // the tile map
+      vertical_bindings.insert(vertical_bindings.end(), {kBuffer, kBuffer});  // the tile map, FLAG's input
+    }
+    layers_.emplace(frame.ctx, layer_format(precision), extent_x, extent_y, static_cast<std::uint32_t>(layer_count_));
+    horizontal_.emplace(frame.ctx, vk::spirv("flag/horizontal" + variant), horizontal_bindings, sizeof(PassParams),
+                        horizontal_constants);
+    vertical_.emplace(frame.ctx, vk::spirv("flag/vertical" + variant), vertical_bindings, sizeof(PassParams),
+                      vertical_constants);
+    horizontal_->bind(0, *flag_input);
+    horizontal_->bind(1, *layers_);
+    vertical_->bind(0, *layers_);
+    vertical_->bind(1, *flag_output);
+    const std::uint32_t after_brackets = bracketed ? 3 : 2;
+    if (tile_px_ > 0) {
+      horizontal_->bind(after_brackets, tiles_->buffer());
+      vertical_->bind(after_brackets, tiles_->buffer());
+      vertical_->bind(after_brackets + 1, *flag_input);
+    }
+    if (bracketed) {
       brackets_.emplace(vk::make_storage_buffer(
-          frame.ctx, flag_bracket_buffer_bytes(low_height_, static_cast<std::uint32_t>(pattern_.layers())),
+          frame.ctx, flag_bracket_buffer_bytes(low_height_, static_cast<std::uint32_t>(layer_count_)),
           "FLAG bracket buffer"));
-      bracket_.emplace(frame.ctx, vk::spirv("flag/bracket"), std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer},
-                       sizeof(PassParams),
-                       std::vector<std::int32_t>{pattern_.layers(), kBracketChunk, pattern_.spacing_px});
+      std::vector<std::int32_t> constants = {layer_count_, kBracketChunk, pattern_.spacing_px};
+      std::vector<VkDescriptorType> bindings = {kBuffer, kBuffer, kBuffer};
+      if (tile_px_ > 0) constants.insert(constants.end(), {1, tile_px_}), bindings.push_back(kBuffer);
+      bracket_.emplace(frame.ctx, vk::spirv(tile_px_ > 0 ? "flag/bracket_adaptive" : "flag/bracket"), bindings,
+                       sizeof(PassParams), constants);
       bracket_->bind(0, *flag_input);
       bracket_->bind(2, *brackets_);
-      horizontal_.bind(2, *brackets_);
-      vertical_.bind(2, *brackets_);
+      if (tile_px_ > 0) bracket_->bind(3, tiles_->buffer());
+      horizontal_->bind(2, *brackets_);
+      vertical_->bind(2, *brackets_);
     }
   }
 
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
     // frame_.params may be a warm-up's smaller region: derive the low-res one from it each time.
     const PassParams full = frame_.params;
-    PassParams low = full;
-    low.width_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.width_px), scale_));
-    low.height_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.height_px), scale_));
-    low.half_n = pattern_.half();
-    low.max_radius_px = pattern_.max_radius_px();
+    const PassParams grid = grid_params(full);
+    PassParams low = grid;
+    low.half_n = layer_count_ - 1;  // the layers allocated (adaptive: what the scene needs)
     const auto lw = static_cast<std::uint32_t>(low.width_px), lh = static_cast<std::uint32_t>(low.height_px);
     if (downsample_) {
-      downsample_->dispatch(cmd, &low, lw, lh);
+      downsample_->dispatch(cmd, &grid, lw, lh);
       timer.end_pass(cmd, "downsample");
+    }
+    if (tiles_) {
+      tiles_->record(cmd, &timer, grid);
+      const auto t = static_cast<std::uint32_t>(tile_px_);
+      tile_layers_->dispatch(cmd, &low, ceil_div(lw, t), ceil_div(lh, t));
+      timer.end_pass(cmd, "tile_layers");
     }
     if (bracket_) {
       const VkDeviceSize half = brackets_->bytes() / 2;
@@ -166,9 +216,9 @@ class Flag final : public gpu::GpuFilter {
       timer.end_pass(cmd, "bracket");
     }
     const std::uint32_t k = static_cast<std::uint32_t>(pattern_.spacing_px);
-    horizontal_.dispatch(cmd, &low, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, lh);
+    horizontal_->dispatch(cmd, &low, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, lh);
     timer.end_pass(cmd, "horizontal");
-    vertical_.dispatch(cmd, &low, lw, lh);
+    vertical_->dispatch(cmd, &low, lw, lh);
     timer.end_pass(cmd, "vertical");
     if (upsample_) {
       upsample_->dispatch(cmd, &full, frame_.width(), frame_.height());
@@ -177,20 +227,47 @@ class Flag final : public gpu::GpuFilter {
   }
 
   std::uint64_t intermediate_bytes() const override {
-    std::uint64_t bytes = layers_.allocated_bytes();
+    std::uint64_t bytes = layers_->allocated_bytes();
     for (const auto* b : {&packed_low_, &output_low_, &brackets_, &disc_area_low_})
       if (*b) bytes += (*b)->allocated_bytes();
+    if (tiles_) bytes += tiles_->allocated_bytes();
     return bytes;
   }
 
+  // Adaptive: what the tile map found in the last frame and the layers allocated.
+  nlohmann::json stats() override {
+    if (!tiles_) return nlohmann::json::object();
+    const PassParams grid = grid_params(frame_.params);
+    nlohmann::json out = coc_tiles_stats(tiles_->read(grid.width_px, grid.height_px), pattern_, grid.width_px,
+                                         grid.height_px);
+    out["layers"] = layer_count_;
+    out["layers_worst_case"] = pattern_.layers();
+    out["scene_max_disc_index_when_prepared"] = scene_max_index_;
+    return {{"adaptive", out}};
+  }
+
  private:
+  // FLAG's grid (full or reduced resolution) for the frame region `full`, with its pattern's n.
+  PassParams grid_params(const PassParams& full) const {
+    PassParams low = full;
+    low.width_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.width_px), scale_));
+    low.height_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.height_px), scale_));
+    low.half_n = pattern_.half();
+    low.max_radius_px = pattern_.max_radius_px();
+    return low;
+  }
+
   GpuFrame& frame_;
   std::int32_t scale_;
   GatherPattern pattern_;  // the (low-res) pattern the FLAG passes run
   std::uint32_t low_width_, low_height_;
-  std::int32_t outputs_;  // pixels per invocation of the horizontal pass
-  vk::StorageImage3D layers_;
-  vk::ComputePipeline horizontal_, vertical_;
+  std::int32_t outputs_;   // pixels per invocation of the horizontal pass
+  std::int32_t tile_px_;   // adaptive: the tile map's tile size; 0: worst case
+  std::int32_t layer_count_;  // allocated: the pattern's ceil(N/2), or (adaptive) what the scene needs
+  int scene_max_index_ = -1;  // adaptive: the scene's largest disc index when prepared
+  std::optional<gpu::CocTilesGpu> tiles_;
+  std::optional<vk::StorageImage3D> layers_;
+  std::optional<vk::ComputePipeline> horizontal_, vertical_, tile_layers_;
   std::optional<vk::Buffer> packed_low_, output_low_, brackets_, disc_area_low_;
   std::optional<vk::ComputePipeline> downsample_, upsample_, bracket_;
 };

@@ -1,6 +1,6 @@
 #pragma once
-// FLAG on the GPU (flag_gpu.cpp): passes downsample (scale > 1), bracket (bracketed precisions),
-// horizontal, vertical, upsample (scale > 1).
+// FLAG on the GPU (flag_gpu.cpp): passes downsample (scale > 1), tile_max, tile_reach, tile_layers
+// (adaptive = on), bracket (bracketed precisions), horizontal, vertical, upsample (scale > 1).
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "coc_tiles_gpu.hpp"
 #include "flag.hpp"
 #include "flag_gpu.hpp"
 #include "flag_memory.hpp"
@@ -25,6 +26,16 @@ std::vector<PassWork> flag_work(const FilterOptions& o, int w, int h) {
   const double layer_bytes = lows * low.layers() * bytes_per_texel(precision);
   std::vector<PassWork> work;
   if (s > 1) work.push_back({"downsample", full, full * 32, lows * 16});
+  if (adaptive_on(o)) {
+    // The tile map on FLAG's grid: tile_max reads every radius, tile_reach a (2 R + 1)^2 and
+    // tile_layers a (2 R + 1) neighbourhood of tiles. The passes below stay at the worst case's
+    // work: a bound; the scene decides how much less they do (stats: adaptive).
+    const int t = adaptive_tile_px(o), range = tile_reach_range(low, t);
+    const double tiles = static_cast<double>(ceil_div(ceil_div(w, s), t)) * ceil_div(ceil_div(h, s), t);
+    work.push_back({"tile_max", lows, lows * 16, tiles * 16});
+    work.push_back({"tile_reach", tiles * (2 * range + 1) * (2 * range + 1), tiles * 16, tiles * 16});
+    work.push_back({"tile_layers", tiles * (2 * range + 1), tiles * 16, tiles * 16});
+  }
   if (is_bracketed(precision))
     work.push_back({"bracket", lows * low.size_n, lows * 16,
                     static_cast<double>(flag_bracket_buffer_bytes(ceil_div(h, s), low.layers()))});
@@ -51,6 +62,10 @@ MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx
     const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
     other += DiscAreaTable(low).by_index().size() * sizeof(std::int32_t);  // the downsample's area table
   }
+  // Adaptive: the worst case stays the model (what a budget must allow for); the layers actually
+  // allocated follow the scene (the point's memory.allocated_bytes). Plus the tile map.
+  if (adaptive_on(o)) other += gpu::CocTilesGpu::bytes(static_cast<int>(e.width), static_cast<int>(e.height),
+                                                       adaptive_tile_px(o));
   use.bytes = layers + other;
   const double paper = flag_paper_bytes(w, h, o.pattern, precision, o.buffer_scale);
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
@@ -77,6 +92,42 @@ int cpu_strip_px(const FilterOptions& o, int w, int h) {
   return std::max<int>(64, static_cast<int>(kCpuWholeBufferBytes / column_bytes) - 2 * halo);
 }
 
+// adaptive = on, as the GPU computes it: FLAG on its grid (full or reduced) with the layers the
+// scene's largest disc needs (the same image as with ceil(N/2): scene_sized_pattern), then every
+// pixel of a tile nothing blurred reaches (D = 0) gets its input instead of its round trip through
+// the layers.
+Image flag_adaptive_cpu(const CpuInput& in, LayerPrecision precision) {
+  const FilterOptions& o = in.options;
+  const int s = o.buffer_scale;
+  const GatherPattern grid = reduced_pattern(o.pattern, s);
+  check_layer_input(in.color, precision);
+  const Image packed = s == 1 ? in.packed : flag_downsample(in.color, in.radius_px, grid, s);
+  const CocTiles tiles = coc_tiles(packed, grid, adaptive_tile_px(o));
+  const GatherPattern sized = scene_sized_pattern(grid, tiles.scene_max_index);
+  FilterOptions sized_options = o;
+  sized_options.pattern = sized;
+  Image blurred;
+  if (const int strip = s == 1 ? cpu_strip_px(sized_options, packed.width, packed.height) : 0; strip > 0)
+    blurred = flag_blur_in_strips(packed, sized, precision, strip, in.threads);
+  else
+    blurred = flag_blur(packed, sized, precision, in.threads);
+  for (int y = 0; y < packed.height; ++y)
+    for (int x = 0; x < packed.width; ++x) {
+      if (tiles.reach_index[static_cast<std::size_t>(tiles.tile_of(x, y))] != 0) continue;
+      const float* src = packed.px(x, y);
+      const bool inside = in_disc(src[3] * src[3], 0, 0);
+      for (int c = 0; c < 3; ++c) blurred.px(x, y)[c] = 0.0f + (inside ? src[c] : 0.0f);
+    }
+  if (in.stats) {
+    nlohmann::json stats = coc_tiles_stats(tiles, grid, packed.width, packed.height);
+    stats["layers"] = sized.layers();
+    stats["layers_worst_case"] = grid.layers();
+    stats["scene_max_disc_index_when_prepared"] = tiles.scene_max_index;
+    (*in.stats)["adaptive"] = stats;
+  }
+  return s == 1 ? blurred : flag_upsample(blurred, in.color, in.radius_px, s);
+}
+
 }  // namespace
 
 void declare_flag(std::vector<Method>& methods) {
@@ -90,14 +141,23 @@ void declare_flag(std::vector<Method>& methods) {
   m.options = {{"horizontal_block",
                 "flag: pixels per GPU invocation of the horizontal pass, at stride k (auto: 4 on CPU devices such as "
                 "lavapipe, 1 on GPUs; every block gives the same image)",
-                0, 0, 0, false, flag_horizontal_blocks()}};
+                0, 0, 0, false, flag_horizontal_blocks()},
+               adaptive_option("flag, off: a ceil(N/2)-layer 3D buffer and every pixel's gather over the whole "
+                               "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "
+                               "GPU when the run is prepared, one int read back), a tile-max CoC map bounding each "
+                               "workgroup's row samples and each tile's layers, and tiles nothing blurred reaches "
+                               "output their input: the worst case's image bit for bit (f32), or up to one rounding "
+                               "of the layer format in those tiles"),
+               adaptive_tile_option()};
   m.device = [](const FilterOptions& o) {
     vk::DeviceRequirements needs;
     needs.storage_image_3d_formats = {layer_format(layer_precision_from_string(o.precision))};
+    needs.subgroup_arithmetic = adaptive_on(o);  // the tile map's bound is shared across a subgroup
     return needs;
   };
   m.cpu_reference = [](const CpuInput& in) {
     const LayerPrecision precision = layer_precision_from_string(in.options.precision);
+    if (adaptive_on(in.options)) return flag_adaptive_cpu(in, precision);
     if (in.options.buffer_scale != 1)
       return flag_reduced_blur(in.color, in.radius_px, in.options.pattern, in.options.buffer_scale, precision,
                                in.threads);

@@ -38,7 +38,7 @@ Image naive_gather_reference(const Image& packed, const GatherPattern& p, int th
 // disc adds +0.0 (simd::masked), which leaves the sum exactly as it is: each output adds the same
 // values in the same order as naive_gather_reference. Samples outside the image's largest disc are
 // skipped (in_disc is monotonic in the radius, so no smaller disc holds them).
-Image naive_gather(const Image& packed, const GatherPattern& p, int threads) {
+Image naive_gather(const Image& packed, const GatherPattern& p, int threads, const CocTiles* tiles) {
   using namespace simd;
   constexpr int kLanes = 8, kVectors = kLanes / kWidth, kPad = kLanes;
   const int w = packed.width, h = packed.height, n = p.half(), k = p.spacing_px;
@@ -73,10 +73,11 @@ Image naive_gather(const Image& packed, const GatherPattern& p, int threads) {
   parallel_rows(h, threads, [&](int y) {
     for (int x0 = 0; x0 < w; x0 += kLanes) {
       f32v sum_r[kVectors] = {}, sum_g[kVectors] = {}, sum_b[kVectors] = {};
+      const int bound = tiles ? tiles->reach_over(x0, y, std::min(w, x0 + kLanes) - 1, y) : max_index;
       for (int j = -n; j <= n; ++j) {
         const int sy = y + j * k;
         if (sy < 0 || sy >= h) continue;
-        const int reach = reach_layer(max_index, j, n);
+        const int reach = reach_layer(bound, j, n);
         // Columns whose window of eight samples overlaps the image.
         const int i_lo = std::max(-reach, -((x0 + kLanes - 1) / k)), i_hi = std::min(reach, (w - 1 - x0) / k);
         const std::size_t base = static_cast<std::size_t>(sy) * pw + kPad + static_cast<std::size_t>(x0);

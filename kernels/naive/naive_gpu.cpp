@@ -2,8 +2,10 @@
 // invocation at stride k (shaders/naive/gather.comp).
 #include "naive_gpu.hpp"
 
+#include <optional>
 #include <stdexcept>
 
+#include "coc_tiles_gpu.hpp"
 #include "vk/spirv.hpp"
 
 namespace bokeh {
@@ -33,34 +35,50 @@ std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / 
 
 class NaiveGather final : public gpu::GpuFilter {
  public:
-  NaiveGather(gpu::GpuFrame& frame, GatherBlock block)
+  // tile_px > 0: adaptive (the tile-max CoC map bounds each workgroup's gather, shaders/naive/gather.comp).
+  NaiveGather(gpu::GpuFrame& frame, GatherBlock block, int tile_px)
       : frame_(frame),
         block_(block),
-        gather_(frame.ctx, vk::spirv("naive/gather"),
-                {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, sizeof(gpu::PassParams),
-                {block.x, block.y}) {
+        tiles_(tile_px > 0 ? std::optional<gpu::CocTilesGpu>(std::in_place, frame.ctx, frame.packed, frame.width(),
+                                                              frame.height(), frame.params.spacing_px, tile_px)
+                           : std::nullopt),
+        gather_(frame.ctx, vk::spirv(tiles_ ? "naive/gather_adaptive" : "naive/gather"),
+                tiles_ ? std::vector<VkDescriptorType>(3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER)
+                       : std::vector<VkDescriptorType>(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER),
+                sizeof(gpu::PassParams),
+                tiles_ ? std::vector<std::int32_t>{block.x, block.y, tile_px} : std::vector<std::int32_t>{block.x, block.y}) {
     gather_.bind(0, frame.packed);
     gather_.bind(1, frame.output);
+    if (tiles_) gather_.bind(2, tiles_->buffer());
   }
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
+    if (tiles_) tiles_->record(cmd, &timer, frame_.params);
     // Invocation (gx, gy) covers block (gx / k, gy / k) of x k by y k pixels, phase (gx % k, gy % k).
     const auto k = static_cast<std::uint32_t>(frame_.params.spacing_px);
     const auto bx = static_cast<std::uint32_t>(block_.x), by = static_cast<std::uint32_t>(block_.y);
     gather_.dispatch(cmd, &frame_.params, ceil_div(frame_.width(), bx * k) * k, ceil_div(frame_.height(), by * k) * k);
     timer.end_pass(cmd, "gather");
   }
-  std::uint64_t intermediate_bytes() const override { return 0; }
+  std::uint64_t intermediate_bytes() const override { return tiles_ ? tiles_->allocated_bytes() : 0; }
+  nlohmann::json stats() override {
+    if (!tiles_) return nlohmann::json::object();
+    const GatherPattern pattern{2 * frame_.params.half_n + 1, frame_.params.spacing_px};
+    return {{"adaptive", coc_tiles_stats(tiles_->read(frame_.params.width_px, frame_.params.height_px), pattern,
+                                         frame_.params.width_px, frame_.params.height_px)}};
+  }
 
  private:
   gpu::GpuFrame& frame_;
   GatherBlock block_;
+  std::optional<gpu::CocTilesGpu> tiles_;
   vk::ComputePipeline gather_;
 };
 
 }  // namespace
 
 std::unique_ptr<gpu::GpuFilter> make_naive_gpu(gpu::GpuFrame& frame, const FilterOptions& options) {
-  return std::make_unique<NaiveGather>(frame, naive_gather_block(options, frame.ctx.info()));
+  return std::make_unique<NaiveGather>(frame, naive_gather_block(options, frame.ctx.info()),
+                                       adaptive_on(options) ? adaptive_tile_px(options) : 0);
 }
 
 }  // namespace bokeh

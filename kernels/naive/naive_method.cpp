@@ -1,4 +1,5 @@
 // naive: the quadratic gather of the FLAG paper, section 3.1.
+#include "coc_tiles_gpu.hpp"
 #include "method.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
@@ -11,17 +12,57 @@ void declare_naive(std::vector<Method>& methods) {
   m.description = "naive quadratic gather, N x N samples at spacing k (FLAG paper 3.1)";
   m.precisions = {"f32"};
   // Same output for every block (bit for bit: each output adds its samples in the same order); only
-  // the speed differs, by device. See shaders/naive/gather.comp.
-  m.options = {naive_gather_block_option()};
-  m.cpu_reference = [](const CpuInput& in) { return naive_gather(in.packed, in.options.pattern, in.threads); };
+  // the speed differs, by device. See shaders/naive/gather.comp. Likewise adaptive = on.
+  m.options = {naive_gather_block_option(),
+               adaptive_option("off: every pixel gathers the pattern's largest disc (the worst case); on: model only "
+                               "what the scene requires: a tile-max CoC map (passes tile_max, tile_reach) bounds each "
+                               "pixel's gather by the largest disc that can reach its tile, tiles nothing blurred "
+                               "reaches output their input, and FLAG allocates the layers the scene's largest radius "
+                               "needs (found on the GPU when the run is prepared). The image is the worst case's (naive: "
+                               "bit for bit; FLAG: up to one rounding of the layer format where a tile passes its input "
+                               "through)"),
+               adaptive_tile_option()};
+  // Adaptive: the tile map's bound is shared across a subgroup (subgroupMax, shaders/common/tiles.glsl).
+  m.device = [](const FilterOptions& o) {
+    vk::DeviceRequirements needs;
+    needs.subgroup_arithmetic = adaptive_on(o);
+    return needs;
+  };
+  m.cpu_reference = [](const CpuInput& in) {
+    if (!adaptive_on(in.options)) return naive_gather(in.packed, in.options.pattern, in.threads);
+    const CocTiles tiles = coc_tiles(in.packed, in.options.pattern, adaptive_tile_px(in.options));
+    if (in.stats)
+      (*in.stats)["adaptive"] = coc_tiles_stats(tiles, in.options.pattern, in.packed.width, in.packed.height);
+    return naive_gather(in.packed, in.options.pattern, in.threads, &tiles);
+  };
   m.make_gpu = make_naive_gpu;
   // Every pixel tests all N x N samples; it reads the packed image and writes the output once.
+  // Adaptive: the tile map's passes (tile_max reads every radius, tile_reach a (2 R + 1)^2
+  // neighbourhood of tiles), and the gather's N x N as the bound it is: the scene decides how much
+  // less it visits (stats: adaptive.gather_sample_fraction).
   m.work = [](const FilterOptions& o, int w, int h) {
     const double pixels = static_cast<double>(w) * h;
-    return std::vector<PassWork>{{"gather", pixels * o.pattern.samples_per_pixel(), pixels * 16, pixels * 16}};
+    std::vector<PassWork> work;
+    if (adaptive_on(o)) {
+      const int t = adaptive_tile_px(o), range = tile_reach_range(o.pattern, t);
+      const double tiles = static_cast<double>((w + t - 1) / t) * ((h + t - 1) / t);
+      work.push_back({"tile_max", pixels, pixels * 16, tiles * 16});
+      work.push_back({"tile_reach", tiles * (2 * range + 1) * (2 * range + 1), tiles * 16, tiles * 16});
+    }
+    work.push_back({"gather", pixels * o.pattern.samples_per_pixel(), pixels * 16, pixels * 16});
+    return work;
   };
-  m.gpu_memory = [](const FilterOptions&, int, int, vk::Context*) { return MemoryUse{}; };
-  m.cpu_memory_bytes = [](const FilterOptions&, int, int) { return std::uint64_t{0}; };
+  m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context*) {
+    MemoryUse use;
+    if (adaptive_on(o)) use.bytes = gpu::CocTilesGpu::bytes(w, h, adaptive_tile_px(o));
+    use.details = {{"tile_map_bytes", use.bytes}};
+    return use;
+  };
+  m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
+    if (!adaptive_on(o)) return std::uint64_t{0};
+    const auto t = static_cast<std::uint64_t>(adaptive_tile_px(o));
+    return (static_cast<std::uint64_t>(w) + t - 1) / t * ((static_cast<std::uint64_t>(h) + t - 1) / t) * 8;
+  };
   // The same sums in the same order as the CPU: only f32 rounding of the GPU's fused operations.
   m.gpu_tolerance = [](const FilterOptions&) { return 1e-5; };
   m.storage_tolerance = [](const FilterOptions&) { return 0.0; };

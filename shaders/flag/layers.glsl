@@ -11,33 +11,39 @@ layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 // bins[m][z] = the row samples whose disc reaches exactly layer z in column p0.x + m k, added left to
 // right. Each loaded sample serves up to OUTPUTS columns (their offsets i - m differ); its disc
 // index is computed once, so a column's reach is a subtraction and an integer square root.
-void flag_bins(ivec2 p0, out vec3 bins[OUTPUTS][LAYERS]) {
+// reach_n (uniform, <= n): samples further than reach_n k along the row reach none of the columns,
+// and no disc reaches a layer above reach_n (LAYERS - 1 in the worst case; the adaptive passes take
+// it from the tile-max CoC map, tiles.glsl). The bins above it stay 0.
+void flag_bins(ivec2 p0, int reach_n, out vec3 bins[OUTPUTS][LAYERS]) {
   const int n = LAYERS - 1, k = SPACING;
   for (int m = 0; m < OUTPUTS; ++m)
     for (int z = 0; z < LAYERS; ++z) bins[m][z] = vec3(0.0);
-  for (int i = -n; i < n + OUTPUTS; ++i) {
+  for (int i = -reach_n; i < reach_n + OUTPUTS; ++i) {
     const int sx = p0.x + i * k;
     if (sx < 0 || sx >= params.width_px) continue;
     const vec4 s = packed_input[index_of(ivec2(sx, p0.y))];
     const int index = disc_index(s.a * s.a, k, 2 * n * n);
     for (int m = 0; m < OUTPUTS; ++m) {
       const int di = i - m;
-      if (di < -n || di > n) continue;  // uniform: outside column m's pattern
+      if (di < -reach_n || di > reach_n) continue;  // uniform: outside column m's pattern
       const int z = reach_layer(index, di, n);
       // A masked add to every bin rather than bins[m][z] += s: a dynamically indexed private array
       // costs a scalar load and store per lane on lavapipe (measured: 30% of this pass), a select
       // does not. Adding -0.0 leaves every sum exactly as it is.
       if (z >= 0)
-        for (int zz = 0; zz < LAYERS; ++zz) bins[m][zz] += zz == z ? s.rgb : vec3(-0.0);
+        for (int zz = 0; zz < LAYERS; ++zz) {
+          if (zz > reach_n) break;  // uniform
+          bins[m][zz] += zz == z ? s.rgb : vec3(-0.0);
+        }
     }
   }
 }
 
 // layer[z] = sum of the row's samples whose disc reaches vertical offset z k in this column: the
 // bins accumulated from the outermost layer inwards.
-void flag_layers(ivec2 p, out vec3 layer[LAYERS]) {
+void flag_layers(ivec2 p, int reach_n, out vec3 layer[LAYERS]) {
   vec3 bins[OUTPUTS][LAYERS];
-  flag_bins(p, bins);
+  flag_bins(p, reach_n, bins);
   vec3 running = vec3(0.0);
   for (int z = LAYERS - 1; z >= 0; --z) {
     running += bins[0][z];

@@ -1,14 +1,25 @@
 # FLAG's 3D-buffer precisions, as kernels/flag/flag_precision.cpp names them: name, GLSL image
-# format, bracketed. One horizontal and one vertical pass per precision.
+# format, bracketed. One horizontal and one vertical pass per precision, worst case and adaptive
+# (method option adaptive = on: bounded by the tile-max CoC map, shaders/common/tiles.glsl).
 foreach(entry IN ITEMS f32:rgba32f:0 f16:rgba16f:0 r11g11b10f:r11f_g11f_b10f:0 unorm10_bracketed:rgb10_a2:1
                        unorm16_bracketed:rgba16:1)
   string(REPLACE ":" ";" fields ${entry})
   list(GET fields 0 precision)
   list(GET fields 1 format)
   list(GET fields 2 bracketed)
-  bokeh_shader(flag horizontal_${precision} horizontal.comp LAYER_FORMAT=${format} BRACKETED=${bracketed})
-  bokeh_shader(flag vertical_${precision} vertical.comp LAYER_FORMAT=${format} BRACKETED=${bracketed})
+  foreach(adaptive 0 1)
+    set(suffix "")
+    if(adaptive)
+      set(suffix "_adaptive")
+    endif()
+    bokeh_shader(flag horizontal${suffix}_${precision} horizontal.comp LAYER_FORMAT=${format} BRACKETED=${bracketed}
+                 ADAPTIVE=${adaptive})
+    bokeh_shader(flag vertical${suffix}_${precision} vertical.comp LAYER_FORMAT=${format} BRACKETED=${bracketed}
+                 ADAPTIVE=${adaptive})
+  endforeach()
 endforeach()
-bokeh_shader(flag bracket bracket.comp)
+bokeh_shader(flag bracket bracket.comp ADAPTIVE=0)
+bokeh_shader(flag bracket_adaptive bracket.comp ADAPTIVE=1)
 bokeh_shader(flag downsample downsample.comp)
 bokeh_shader(flag upsample upsample.comp)
+bokeh_shader(flag tile_layers tile_layers.comp)

@@ -1,6 +1,11 @@
 #version 450
 // FLAG vertical pass (paper 3.2.3): sum layer |j| of rows y + j k.
 // BRACKETED=1: each texel is (v - offset) / scale of its row's bracket: read back offset + scale * q.
+// ADAPTIVE=1 (method option adaptive = on): a pixel whose tile nothing blurred reaches (D = 0 in the
+// tile-max CoC map, tiles.glsl) outputs its input; the others sum layers |j| <= min(isqrt(D), n)
+// only: the layers above are 0 there (no source reaching the pixel reaches them), and adding +0.0
+// changes no sum, so the output is the worst case's bit for bit. The horizontal pass wrote every
+// layer read here (its Z covers what this tile reads).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
@@ -12,16 +17,44 @@ layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
 // As in layers.glsl: [y * LAYERS + z].rgb = min bits, [half + y * LAYERS + z].rgb = max bits.
 layout(std430, binding = 2) readonly buffer Brackets { uvec4 bracket_bits[]; };
 #endif
+#if ADAPTIVE
+#define TILE_PX_ID 1
+#define TILES_BINDING (2 + BRACKETED)
+#include "tiles.glsl"
+layout(std430, binding = 3 + BRACKETED) readonly buffer Packed { vec4 packed_input[]; };  // FLAG's input
+#endif
 
 void main() {
   const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+#if ADAPTIVE
+  // Before any invocation returns: D of this pixel's tile (-1 outside the frame), and the largest
+  // over the subgroup (uniform).
+  const int pixel_reach = tile_bounds_over(p, p).x;
+  const int reach = subgroupMax(pixel_reach);
+  if (reach < 0) return;  // no pixel of the frame
+  const int rows = min(isqrt(reach), LAYERS - 1);
+#endif
   if (outside(p)) return;
   const int n = params.half_n, k = params.spacing_px;
+#if ADAPTIVE
+  if (pixel_reach == 0) {
+    // Nothing blurred reaches it: its input (the gather of its own sample, from +0).
+    const vec4 s = packed_input[index_of(p)];
+    result[index_of(p)] = vec4(vec3(0.0) + (in_disc(s.a * s.a, 0, 0) ? s.rgb : vec3(0.0)), 1.0);
+    return;
+  }
+  const int pixel_rows = min(isqrt(pixel_reach), LAYERS - 1);
+#else
+  const int rows = n;
+#endif
 #if BRACKETED
   const uint h = uint(bracket_bits.length()) / 2u;
 #endif
   vec3 sum = vec3(0.0);
-  for (int j = -n; j <= n; ++j) {
+  for (int j = -rows; j <= rows; ++j) {
+#if ADAPTIVE
+    if (abs(j) > pixel_rows) continue;  // 0 there: no source reaching this pixel reaches that layer
+#endif
     const int sy = p.y + j * k;
     if (sy < 0 || sy >= params.height_px) continue;
     const vec3 q = imageLoad(layers, ivec3(p.x, sy, abs(j))).rgb;

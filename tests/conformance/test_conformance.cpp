@@ -1,5 +1,7 @@
-// One suite over the registry: every method x precision x buffer scale it accepts, checked against
-// what the method itself declares (method.hpp). A new method is covered without editing this file.
+// One suite over the registry: every method x precision x buffer scale it accepts, each at its
+// defaults and with every other choice of each enumerated option (one option at a time: a GPU
+// block shape, adaptive = on), checked against what the method itself declares (method.hpp). A new
+// method or option is covered without editing this file.
 //   GPU vs CPU reference: max |GPU - CPU| <= gpu_tolerance x the reference's largest value.
 //   Radius 0 (a pinhole lens) is the identity, up to storage_tolerance x the largest value.
 //   Energy: at a constant radius with a black border wider than any kernel, the output's total equals
@@ -8,7 +10,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <string>
 
 #include "coc.hpp"
 #include "method.hpp"
@@ -31,8 +35,17 @@ struct Config {
   FilterOptions options;
 };
 
+// The options a configuration sets away from their defaults, as "key:choice" ("" at the defaults).
+std::string choices_text(const Config& c) {
+  std::string text;
+  for (const auto& spec : c.method->options)
+    if (const double v = c.options.number(spec.key); v != spec.default_value)
+      text += (text.empty() ? "" : " ") + spec.key + ":" + spec.to_json(v).get<std::string>();
+  return text;
+}
+
 void PrintTo(const Config& c, std::ostream* os) {
-  *os << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale;
+  *os << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale << " " << choices_text(c);
 }
 
 // N = 9 at k = 2: radii up to 8 px, four rows of FLAG layers, kernels of 8..11 px.
@@ -45,6 +58,13 @@ std::vector<Config> all_configs() {
         o.precision = precision;
         o.buffer_scale = scale;
         configs.push_back({&m, o});
+        for (const auto& spec : m.options)
+          for (std::size_t choice = 0; choice < spec.choices.size(); ++choice) {
+            if (static_cast<double>(choice) == spec.default_value) continue;
+            FilterOptions varied = o;
+            varied.values[spec.key] = static_cast<double>(choice);
+            configs.push_back({&m, varied});
+          }
       }
   return configs;
 }
@@ -74,8 +94,9 @@ TEST_P(Conformance, GpuMatchesCpuReferenceWithinTheStatedBound) {
   for (float v : gpu.pixels) ASSERT_TRUE(std::isfinite(v));
   const double error = max_abs_diff(gpu, cpu) / max_abs(cpu);
   const double bound = c.method->gpu_tolerance(c.options);
-  std::printf("[conformance] %s %s 1/%d: GPU vs CPU %.3g of the largest value (bound %.3g)\n", c.method->name.c_str(),
-              c.options.precision.c_str(), c.options.buffer_scale, error, bound);
+  std::printf("[conformance] %s %s 1/%d %s: GPU vs CPU %.3g of the largest value (bound %.3g)\n",
+              c.method->name.c_str(), c.options.precision.c_str(), c.options.buffer_scale, choices_text(c).c_str(), error,
+              bound);
   EXPECT_LE(error, bound);
 }
 
@@ -116,8 +137,12 @@ TEST_P(Conformance, EnergyIsConservedAwayFromTheBorders) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(all_configs()), [](const auto& info) {
-  return info.param.method->name + "_" + info.param.options.precision + "_scale" +
-         std::to_string(info.param.options.buffer_scale);
+  std::string name = info.param.method->name + "_" + info.param.options.precision + "_scale" +
+                     std::to_string(info.param.options.buffer_scale);
+  const std::string choices = choices_text(info.param);
+  if (!choices.empty()) name += "_";
+  for (char ch : choices) name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+  return name;
 });
 
 // Every method declares what the harness reads of it.

@@ -1,0 +1,221 @@
+// `bokehbench adaptive`: what modelling only what a scene requires buys. Every registered method that
+// declares the option `adaptive` (off: sized for the worst case; on: only what the scene needs) is
+// measured both ways, interleaved, on scenes from mostly in focus to fully defocused, each at one or
+// more largest CoC radii below or at the pattern's: per scene and method, the speed-up, the memory
+// allocated and saved (what the filter allocated for the scene, not the model), and the error of
+// each mode against the exact scatter.
+#include <algorithm>
+#include <map>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "accuracy.hpp"
+#include "commands.hpp"
+#include "method.hpp"
+#include "report.hpp"
+#include "scene.hpp"
+#include "sweep.hpp"
+
+namespace bokeh {
+
+namespace {
+
+constexpr const char* kOption = "adaptive";  // the option's key, the same in every method that has it
+
+struct AdaptiveOptions {
+  std::vector<std::string> scenes = {"mostly_in_focus", "half_defocused", "fully_defocused"};
+  std::vector<double> max_coc_px = {12, 40};
+  std::string pattern = "41x2";
+  int width_px = 800, height_px = 600;
+  std::vector<std::string> methods;
+  SweepFlags sweep;
+  MethodOptionFlags method_options;
+  bool quick = false;
+  CLI::Option *width_opt = nullptr, *height_opt = nullptr, *coc_opt = nullptr, *pattern_opt = nullptr,
+              *budget_opt = nullptr;
+};
+
+// Every registered method that declares the adaptive option as an enumeration with "off" and "on".
+std::vector<std::string> adaptive_methods() {
+  std::vector<std::string> names;
+  for (const Method& m : registered_methods())
+    if (const OptionSpec* spec = m.option(kOption)) {
+      const auto& c = spec->choices;
+      if (std::find(c.begin(), c.end(), "off") != c.end() && std::find(c.begin(), c.end(), "on") != c.end())
+        names.push_back(m.name);
+    }
+  return names;
+}
+
+double median_ms(const nlohmann::json& point) { return point["frame_ms"]["median"].get<double>(); }
+
+// off / on of the samples the two points took in the same round: the machine's drift (a shared VM
+// moves by 2x within minutes) cancels in each ratio. Their median and quartiles.
+nlohmann::json paired_ratios(const nlohmann::json& off, const nlohmann::json& on) {
+  std::map<int, double> off_by_round;
+  for (std::size_t i = 0; i < off["samples_ms"].size(); ++i)
+    off_by_round[off["sample_rounds"][i].get<int>()] = off["samples_ms"][i].get<double>();
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < on["samples_ms"].size(); ++i)
+    if (auto it = off_by_round.find(on["sample_rounds"][i].get<int>());
+        it != off_by_round.end() && on["samples_ms"][i].get<double>() > 0)
+      ratios.push_back(it->second / on["samples_ms"][i].get<double>());
+  if (ratios.empty()) return nullptr;
+  return {{"median", runner::quantile(ratios, 0.5)},
+          {"q1", runner::quantile(ratios, 0.25)},
+          {"q3", runner::quantile(ratios, 0.75)},
+          {"rounds", ratios.size()}};
+}
+
+nlohmann::json error_summary(const nlohmann::json& point) {
+  const auto& e = point["error"]["vs_energy_sum"];
+  return {{"psnr_db", e["psnr_db"]}, {"rmse", e["rmse"]}, {"max_abs_error", e["max_abs_error"]}};
+}
+
+// Pairs each adaptive = on point with its off twin (everything else equal).
+nlohmann::json comparisons_json(const nlohmann::json& points) {
+  auto key = [](const nlohmann::json& p) {
+    nlohmann::json options = p["options"];
+    options.erase(kOption);
+    return fmt::format("{}|{}|{}x{}|{}x{}|{}|{}|{}|{}", p["method"].get<std::string>(), p["scene"].get<std::string>(),
+                       p["width_px"].get<int>(), p["height_px"].get<int>(), p["N"].get<int>(), p["k"].get<int>(),
+                       p["precision"].get<std::string>(), p["buffer_scale"].get<int>(), p["max_coc_px"].get<double>(),
+                       options.dump());
+  };
+  std::map<std::string, const nlohmann::json*> off;
+  for (const auto& p : points)
+    if (p["options"].value(kOption, "") == "off") off[key(p)] = &p;
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& on : points) {
+    if (on["options"].value(kOption, "") != "on") continue;
+    const auto it = off.find(key(on));
+    if (it == off.end()) continue;
+    const nlohmann::json& w = *it->second;
+    const auto bytes = [](const nlohmann::json& p) {
+      return p["memory"].value("allocated_bytes", p["memory"]["bytes"].get<std::uint64_t>());
+    };
+    const std::uint64_t off_bytes = bytes(w), on_bytes = bytes(on);
+    nlohmann::json c = {
+        {"method", on["method"]},
+        {"scene", on["scene"]},
+        {"max_coc_px", on["max_coc_px"]},
+        {"max_radius_px", on["max_radius_px"]},
+        {"precision", on["precision"]},
+        {"off_id", w["id"]},
+        {"on_id", on["id"]},
+        {"frame_ms_off", median_ms(w)},
+        {"frame_ms_on", median_ms(on)},
+        {"speedup", median_ms(on) > 0 ? median_ms(w) / median_ms(on) : 0.0},
+        {"speedup_same_round", paired_ratios(w, on)},
+        {"allocated_bytes_off", off_bytes},
+        {"allocated_bytes_on", on_bytes},
+        {"memory_saved_bytes", static_cast<double>(off_bytes) - static_cast<double>(on_bytes)},
+        {"memory_saved_fraction",
+         off_bytes > 0 ? nlohmann::json(1.0 - static_cast<double>(on_bytes) / static_cast<double>(off_bytes))
+                       : nlohmann::json(nullptr)},
+        {"error_off", error_summary(w)},
+        {"error_on", error_summary(on)},
+        {"scene_stats", on["stats"].value(kOption, nlohmann::json::object())}};
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::string mib_text(double bytes) {
+  if (std::abs(bytes) < 1024 * 1024) return fmt::format("{:.1f} KiB", bytes / 1024);
+  return fmt::format("{:.2f} MiB", bytes / (1024 * 1024));
+}
+
+void adaptive(AdaptiveOptions& o) {
+  if (o.quick) {
+    if (!given(o.width_opt)) o.width_px = 160;
+    if (!given(o.height_opt)) o.height_px = 120;
+    if (!given(o.pattern_opt)) o.pattern = "9x2";
+    if (!given(o.coc_opt)) o.max_coc_px = {4};
+    if (!given(o.budget_opt)) o.sweep.budget_s = 8;
+  }
+  const std::vector<std::string> candidates = adaptive_methods();
+  if (o.methods.empty()) o.methods = candidates;
+  for (const auto& name : o.methods) {
+    find_method(name);  // unknown names: the registry's message
+    if (std::find(candidates.begin(), candidates.end(), name) == candidates.end())
+      throw std::invalid_argument(fmt::format("method '{}' has no option '{}' (methods with one: {})", name, kOption,
+                                              fmt::join(candidates, ", ")));
+  }
+  if (o.methods.empty()) throw std::invalid_argument("no registered method declares the option 'adaptive'");
+  Axes axes;
+  axes.methods = o.methods;
+  axes.backends = {"gpu"};
+  axes.scenes = o.scenes;
+  axes.resolutions = {{o.width_px, o.height_px}};
+  axes.patterns = {parse_pattern(o.pattern)};
+  axes.option_values = o.method_options.values_for(o.methods);
+  if (axes.option_values.count(kOption))
+    throw std::invalid_argument("--adaptive: this command measures every method both ways; leave it out");
+  axes.sweep_choices = {kOption};
+  std::vector<SweepPoint> points;
+  for (double coc : o.max_coc_px) {
+    if (!(coc > 0)) throw std::invalid_argument(fmt::format("--max-coc {} must be a number of pixels > 0", coc));
+    axes.max_coc_px = coc;
+    for (auto& p : expand(axes)) points.push_back(std::move(p));
+  }
+
+  SweepSettings s = o.sweep.settings("adaptive", "plot_adaptive.py");
+  s.config = {{"scenes", o.scenes},
+              {"max_coc_px", o.max_coc_px},
+              {"pattern", o.pattern},
+              {"width_px", o.width_px},
+              {"height_px", o.height_px},
+              {"methods", o.methods},
+              {"backend", "gpu"},
+              {"quick", o.quick},
+              {"worst_case", "adaptive = off: every method sized for the pattern's largest radius"},
+              {"speedup", "median frame time off / on (frames include the CoC pass and, on, the tile-map passes)"},
+              {"memory", "memory.allocated_bytes: what the filter allocated once prepared for the scene"},
+              {"error", "each mode against the exact energy-sum scatter of the same scene and CoC"}};
+  s.derive = [](nlohmann::json& doc) { doc["comparisons"] = comparisons_json(doc["points"]); };
+  s.summary = [](const nlohmann::json& doc) {
+    fmt::print("\n{:<18} {:>7} {:<8} {:>9} {:>9} {:>8} {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n", "scene",
+               "max CoC", "method", "off ms", "on ms", "speed-up", "(same round, IQR)", "off alloc", "on alloc", "saved",
+               "PSNR off", "PSNR on");
+    for (const auto& c : doc["comparisons"]) {
+      const auto& saved = c["memory_saved_fraction"];
+      const auto& paired = c["speedup_same_round"];
+      const std::string same_round =
+          paired.is_null() ? std::string("-")
+                           : fmt::format("{:.2f}x [{:.2f}-{:.2f}]", paired["median"].get<double>(),
+                                         paired["q1"].get<double>(), paired["q3"].get<double>());
+      fmt::print("{:<18} {:>5.0f}px {:<8} {:>9.2f} {:>9.2f} {:>7.2f}x {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n",
+                 c["scene"].get<std::string>(), c["max_coc_px"].get<double>(), c["method"].get<std::string>(),
+                 c["frame_ms_off"].get<double>(), c["frame_ms_on"].get<double>(), c["speedup"].get<double>(), same_round,
+                 mib_text(c["allocated_bytes_off"].get<double>()), mib_text(c["allocated_bytes_on"].get<double>()),
+                 saved.is_null() ? std::string("-") : fmt::format("{:.0f}%", 100 * saved.get<double>()),
+                 psnr_text(c["error_off"]), psnr_text(c["error_on"]));
+    }
+  };
+  run_sweep(points, s);
+}
+
+}  // namespace
+
+void add_adaptive_command(CLI::App& app) {
+  auto o = std::make_shared<AdaptiveOptions>();
+  auto* cmd = app.add_subcommand(
+      "adaptive", "Worst-case vs adaptive (model only what the scene requires): speed-up, memory, error per scene");
+  cmd->add_option("--scenes", o->scenes, "Procedural scenes")->check(CLI::IsMember(procedural_scene_names()));
+  o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px,
+                               "The scenes' largest CoC radius in px, each measured at every value (sets the f-stop; "
+                               "below the pattern's largest radius, the worst case provisions more than needed)");
+  o->pattern_opt = cmd->add_option("--pattern", o->pattern, "Gather pattern NxK the filters are provisioned for");
+  o->width_opt = cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
+  o->height_opt = cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
+  cmd->add_option("--methods", o->methods, "Methods (default: every registered method with an 'adaptive' option)");
+  o->method_options.add_to(cmd);
+  o->sweep.add_to(cmd, 240);
+  o->budget_opt = cmd->get_option("--budget-s");
+  cmd->add_flag("--quick", o->quick, "Small run for CI and tests (160x120, pattern 9x2, max CoC 4 px, 8 s)");
+  cmd->callback([o] { adaptive(*o); });
+}
+
+}  // namespace bokeh

@@ -1,0 +1,4 @@
+# The naive gather: worst case (every pixel's gather bounded by the pattern's largest disc) and
+# adaptive (bounded by the tile-max CoC map, method option adaptive = on).
+bokeh_shader(naive gather gather.comp ADAPTIVE=0)
+bokeh_shader(naive gather_adaptive gather.comp ADAPTIVE=1)
