@@ -136,7 +136,9 @@ void adaptive(AdaptiveOptions& o) {
     if (!given(o.budget_opt)) o.sweep.budget_s = 8;
   }
   const std::vector<std::string> candidates = adaptive_methods();
-  if (o.methods.empty()) o.methods = candidates;
+  if (o.methods.empty())
+    for (const auto& name : candidates)
+      if (find_method(name).in_default_sweeps) o.methods.push_back(name);
   for (const auto& name : o.methods) {
     find_method(name);  // unknown names: the registry's message
     if (std::find(candidates.begin(), candidates.end(), name) == candidates.end())
@@ -210,7 +212,7 @@ void add_adaptive_command(CLI::App& app) {
   o->pattern_opt = cmd->add_option("--pattern", o->pattern, "Gather pattern NxK the filters are provisioned for");
   o->width_opt = cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
   o->height_opt = cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
-  cmd->add_option("--methods", o->methods, "Methods (default: every registered method with an 'adaptive' option)");
+  cmd->add_option("--methods", o->methods, "Methods (default: every method in the default sweeps with an 'adaptive' option)");
   o->method_options.add_to(cmd);
   o->sweep.add_to(cmd, 240);
   o->budget_opt = cmd->get_option("--budget-s");

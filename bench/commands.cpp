@@ -1,6 +1,7 @@
 #include "commands.hpp"
 
 #include <algorithm>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -10,14 +11,22 @@
 namespace bokeh {
 
 void MethodOptionFlags::add_to(CLI::App* cmd) {
-  std::vector<std::string> keys;
+  // An option several methods share (adaptive) is one flag; its help gathers each distinct meaning.
+  std::vector<std::pair<std::string, std::string>> help_by_key;
+  std::map<std::string, std::string> flag_by_key;
   for (const Method& m : registered_methods())
     for (const OptionSpec& spec : m.options) {
-      if (std::find(keys.begin(), keys.end(), spec.key) != keys.end()) continue;
-      keys.push_back(spec.key);
-      cmd->add_option_function<std::string>(
-          spec.flag(), [this, key = spec.key](const std::string& text) { given_[key] = text; }, spec.help);
+      auto it = std::find_if(help_by_key.begin(), help_by_key.end(), [&](const auto& kv) { return kv.first == spec.key; });
+      if (it == help_by_key.end()) {
+        help_by_key.emplace_back(spec.key, spec.help);
+        flag_by_key[spec.key] = spec.flag();
+      } else if (it->second.find(spec.help) == std::string::npos) {
+        it->second += " | " + spec.help;
+      }
     }
+  for (const auto& [key, help] : help_by_key)
+    cmd->add_option_function<std::string>(
+        flag_by_key[key], [this, key = key](const std::string& text) { given_[key] = text; }, help);
 }
 
 std::map<std::string, double> MethodOptionFlags::values_for(const std::vector<std::string>& methods) const {

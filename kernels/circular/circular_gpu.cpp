@@ -20,7 +20,28 @@
 // computes 4 adjacent pixels of a row (column), so every value it loads serves up to 4 taps; each
 // output still sums its taps in the CPU's order. The subgroup reduction needs
 // VK_SUBGROUP_FEATURE_ARITHMETIC_BIT in compute (lavapipe and desktop drivers have it).
+//
+// Radius-following mode (adaptive on: circular_blur_adaptive() on the CPU, pass for pass):
+//   layers           as above, but the layers hold (rgb, s) with s the bucket coordinate of the
+//                    radius, and each field's bucket mask, whole and per 32 x 32 tile, is reduced
+//                    (subgroupOr + atomicOr).
+//   tiles            tiles.comp lists the tiles each bucket's passes visit (its pixels' tiles spread
+//                    by its kernel's reach, shaders/circular/tiles.glsl); `plan` turns the lists'
+//                    lengths into the indirect dispatch sizes of every bucket's passes (4 workgroups
+//                    a tile; none for an empty list).
+//   far              for each bucket k = 1..K of the far field (ascending): a horizontal pass (the
+//                    layer's share (rgb, 1) max(0, 1 - |s - k|), bucket k's kernel) and a vertical
+//                    pass adding its result to the field's sum, over their tiles; then
+//                    composite.comp (far).
+//   near             the same for the near field (sum zeroed again), then composite.comp (near).
+// Skipped tiles hold exact zeros of the full convolution, so the output is the same as without
+// tiles. Each bucket's kernel has its own uniform buffer and pipelines (kernel radius and
+// components as specialization constants; a far and a near bucket with the same kernel share
+// pipelines); the component buffers are shared by all of them. A field's bucket passes are stamped
+// as one pass: the runner reserves timestamps per named pass, and the buckets interleave
+// horizontal and vertical passes.
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
@@ -51,21 +72,32 @@ std::vector<VkDescriptorType> convolution_bindings() {
   b[0] = kUniform;
   return b;
 }
+// layers.comp: colour, depth, packed, far, near, channel maxima; the buckets (uniform); the tile state.
+std::vector<VkDescriptorType> layers_bindings() {
+  std::vector<VkDescriptorType> b(6, kBuffer);
+  b.insert(b.end(), {kUniform, kBuffer});
+  return b;
+}
 std::vector<VkDescriptorType> horizontal_bindings() {
   std::vector<VkDescriptorType> b = convolution_bindings();
   b.push_back(kTexels);
+  b.push_back(kBuffer);  // 11: the tile lists (radius-following buckets)
   return b;
 }
 std::vector<VkDescriptorType> vertical_bindings() {
   std::vector<VkDescriptorType> b = convolution_bindings();
   b.insert(b.end(), {kBuffer, kBuffer});
   b.insert(b.end(), 7, kTexels);
+  b.push_back(kBuffer);  // 19: the field's sum (radius-following buckets)
+  b.push_back(kBuffer);  // 20: the tile lists
   return b;
 }
 
-// The Kernel block of convolution.glsl (std140): weight[6], bracket[6], then taps[c * (2R + 1) + i].
-std::vector<float> kernel_block(const CircularKernel& k) {
+// The Kernel block of convolution.glsl (std140): weight[6], bracket[6], then taps[c * (2R + 1) + i];
+// weight[0].z holds the field (read by bucket passes).
+std::vector<float> kernel_block(const CircularKernel& k, int field) {
   std::vector<float> block(4 * (12 + k.components * k.tap_count()), 0.0f);
+  block[2] = static_cast<float>(field);
   for (int c = 0; c < k.components; ++c) {
     std::vector<float> re, im;
     for (std::complex<float> t : k.taps[c]) re.push_back(t.real()), im.push_back(t.imag());
@@ -109,53 +141,102 @@ TexelFormat intermediate_texels(IntermediatePrecision p) {
   throw std::invalid_argument("unknown intermediate precision");
 }
 
-std::vector<std::int32_t> spec(const CircularKernel& k, int layer, int outputs, const CircularPassShape& shape) {
-  return {k.components, k.radius_px, layer, outputs, shape.texel_loads ? 1 : 0, shape.sliding_window ? 1 : 0};
+std::vector<std::int32_t> spec(const CircularKernel& k, int layer, int outputs, const CircularPassShape& shape,
+                               int bucket = 0, int buckets = 1) {
+  return {k.components, k.radius_px, layer,    outputs, shape.texel_loads ? 1 : 0, shape.sliding_window ? 1 : 0,
+          bucket,       buckets};
+}
+
+// Tiles of the radius-following mode (kTilePx, circular_separable.hpp; shaders/circular/tiles.glsl):
+// a tile is one workgroup of kHorizontalOutputs-pixel invocations wide and 4 workgroups high (8 x 8
+// invocations each; plan.comp dispatches 1 x 4 workgroups a list entry), and the transpose for the
+// vertical pass. Lists: one per field, bucket and pass, their lengths first in the tile state.
+constexpr int kListCounts = 4 * 32;
+constexpr std::uint32_t kZeroTile = 0x80000000u;  // ZERO_TILE: a horizontal entry that writes zeros
+static_assert(kTilePx == 8 * kHorizontalOutputs && kTilePx == 8 * kVerticalOutputs && kTilePx == 4 * 8);
+int tile_list_index(int field, int bucket, int pass) { return 2 * (32 * field + bucket - 1) + pass; }
+
+// The Buckets block of layers.comp and tiles.comp (std140): ramp[k] = (scale, offset, 0, 0), then
+// reach[k] = (ceil(R / 32) of the far kernel, of the near kernel, 0, 0), k = 0..K-1 for buckets 1..K.
+std::vector<std::uint32_t> bucket_block(const CircularBuckets& b, const std::vector<int>& far_radius_px,
+                                        const std::vector<int>& near_radius_px) {
+  std::vector<std::uint32_t> block(kCircularBucketTableBytes / 4, 0u);
+  for (int k = 0; k < b.count(); ++k) {
+    block[4 * k] = std::bit_cast<std::uint32_t>(b.ramp_scale[k]);
+    block[4 * k + 1] = std::bit_cast<std::uint32_t>(b.ramp_offset[k]);
+    if (k < static_cast<int>(far_radius_px.size())) {
+      block[4 * (32 + k)] = static_cast<std::uint32_t>((far_radius_px[k] + kTilePx - 1) / kTilePx);
+      block[4 * (32 + k) + 1] = static_cast<std::uint32_t>((near_radius_px[k] + kTilePx - 1) / kTilePx);
+    }
+  }
+  return block;
+}
+
+// Tap radii of every bucket's kernel of one field.
+std::vector<int> bucket_tap_radii(const CircularBuckets& b, int components) {
+  std::vector<int> radii;
+  for (float disc : b.disc_radius_px) radii.push_back(make_circular_kernel_for_disc(components, disc).radius_px);
+  return radii;
 }
 
 // Mirrors `Groups` in shaders/circular/plan.comp.
 struct PlanGroups {
   std::uint32_t horizontal_x, horizontal_y, vertical_x, vertical_y;
 };
-// Offsets of the VkDispatchIndirectCommands plan.comp writes.
+// Offsets of the VkDispatchIndirectCommands plan.comp writes (fixed kernel; the radius-following
+// mode writes one per tile list, at 16 tile_list_index(f, k, pass)).
 constexpr VkDeviceSize kFarHorizontalArgs = 0, kNearHorizontalArgs = 16, kNearVerticalArgs = 32, kArgsBytes = 48;
+VkDeviceSize bucket_args(int field, int bucket, int pass) {
+  return 16 * static_cast<VkDeviceSize>(tile_list_index(field, bucket, pass));
+}
+// ChannelMax of convolution.glsl and layers.comp: 8 maxima and 2 bucket masks.
+constexpr VkDeviceSize kChannelMaxBytes = 10 * sizeof(std::uint32_t);
+
+// Bucket k's kernel of one field with its uniform buffer and passes.
+struct BucketPasses {
+  CircularKernel kernel;
+  vk::Buffer taps;
+  vk::ComputePipeline horizontal, vertical;
+};
 
 class Circular final : public gpu::GpuFilter {
  public:
   Circular(GpuFrame& frame, const FilterOptions& options, int far_components, const CircularPassShape& shape)
       : Circular(frame, far_components, options.integer("near_components"), checked_max_radius(options),
-                 intermediate_precision_from_string(options.precision), shape) {}
+                 intermediate_precision_from_string(options.precision), options.integer("adaptive") == 1, shape) {}
 
   Circular(GpuFrame& frame, int far_components, int near_components, int max_radius_px,
-           IntermediatePrecision precision, const CircularPassShape& shape)
+           IntermediatePrecision precision, bool adaptive, const CircularPassShape& shape)
       : frame_(frame),
-        far_kernel_(make_circular_kernel_for_disc(far_components, max_radius_px)),
-        near_kernel_(make_circular_kernel_for_disc(near_components, max_radius_px)),
+        adaptive_(adaptive),
+        buckets_(circular_buckets(max_radius_px)),
         far_layer_(make_texel_buffer(pixels() * 16, "circular far layer")),
         near_layer_(make_texel_buffer(pixels() * 16, "circular near layer")),
-        channel_max_(vk::make_storage_buffer(frame.ctx, 8 * sizeof(std::uint32_t), "circular channel maxima")),
+        channel_max_(vk::make_storage_buffer(frame.ctx, kChannelMaxBytes, "circular channel maxima")),
         box_(make_texel_buffer(precision == IntermediatePrecision::bracketed10 ? pixels() * 8 : 16,
                                "circular box-sum buffer")),
-        dispatch_args_(vk::make_storage_buffer(frame.ctx, kArgsBytes, "circular dispatch sizes",
-                                               VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)),
-        far_taps_(upload_kernel(far_kernel_)),
-        near_taps_(upload_kernel(near_kernel_)),
+        field_sum_(vk::make_storage_buffer(frame.ctx, adaptive ? pixels() * 16 : 16, "circular field sum")),
+        dispatch_args_(vk::make_storage_buffer(frame.ctx, adaptive ? 16 * kListCounts : kArgsBytes,
+                                               "circular dispatch sizes", VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)),
+        bucket_ramps_(upload_uniform(bucket_block(buckets_, bucket_tap_radii(buckets_, far_components),
+                                                  bucket_tap_radii(buckets_, near_components)),
+                                     "circular buckets")),
+        tile_state_(vk::make_storage_buffer(frame.ctx, adaptive ? 4 * (kListCounts + 4 * tiles()) : 16,
+                                            "circular tile state")),
+        tile_lists_(vk::make_storage_buffer(frame.ctx,
+                                            adaptive ? 4 * (tile_list_index(1, buckets_.count(), 1) + 1) * tiles() : 16,
+                                            "circular tile lists")),
         far_layer_texels_(frame.ctx, far_layer_, VK_FORMAT_R32G32B32A32_SFLOAT, 16, "circular far layer"),
         near_layer_texels_(frame.ctx, near_layer_, VK_FORMAT_R32G32B32A32_SFLOAT, 16, "circular near layer"),
         box_texels_(frame.ctx, box_, VK_FORMAT_R32G32_UINT, 8, "circular box-sum buffer"),
-        layers_(frame.ctx, vk::spirv("circular/layers"), std::vector<VkDescriptorType>(6, kBuffer), sizeof(PassParams),
-                {precision == IntermediatePrecision::bracketed10 ? 1 : 0}),
-        plan_(frame.ctx, vk::spirv("circular/plan"), {kBuffer, kBuffer}, sizeof(PlanGroups)),
-        far_horizontal_(frame.ctx, vk::spirv(std::string("circular/horizontal_") + to_string(precision)),
-                        horizontal_bindings(), sizeof(PassParams),
-                        spec(far_kernel_, kFarLayer, kHorizontalOutputs, shape)),
-        far_vertical_(frame.ctx, vk::spirv(std::string("circular/vertical_") + to_string(precision)),
-                      vertical_bindings(), sizeof(PassParams), spec(far_kernel_, kFarLayer, kVerticalOutputs, shape)),
-        near_horizontal_(frame.ctx, vk::spirv(std::string("circular/horizontal_") + to_string(precision)),
-                         horizontal_bindings(), sizeof(PassParams),
-                         spec(near_kernel_, kNearLayer, kHorizontalOutputs, shape)),
-        near_vertical_(frame.ctx, vk::spirv(std::string("circular/vertical_") + to_string(precision)),
-                       vertical_bindings(), sizeof(PassParams), spec(near_kernel_, kNearLayer, kVerticalOutputs, shape)) {
+        layers_(frame.ctx, vk::spirv("circular/layers"), layers_bindings(), sizeof(PassParams),
+                {precision == IntermediatePrecision::bracketed10 ? 1 : 0, adaptive ? 1 : 0, buckets_.count()}),
+        plan_(frame.ctx, vk::spirv("circular/plan"), {kBuffer, kBuffer, kBuffer}, sizeof(PlanGroups),
+              {adaptive ? 1 : 0, buckets_.count()}),
+        tile_rows_(frame.ctx, vk::spirv("circular/tiles"), {kBuffer, kBuffer, kUniform}, sizeof(PassParams),
+                   {0, buckets_.count()}),
+        tile_columns_(frame.ctx, vk::spirv("circular/tiles"), {kBuffer, kBuffer, kUniform}, sizeof(PassParams),
+                      {1, buckets_.count()}) {
     // Near and far run one after the other, so they share the component buffers.
     const int components = std::max(far_components, near_components);
     const TexelFormat texels = intermediate_texels(precision);
@@ -170,55 +251,163 @@ class Circular final : public gpu::GpuFilter {
     layers_.bind(3, far_layer_);
     layers_.bind(4, near_layer_);
     layers_.bind(5, channel_max_);
+    layers_.bind(6, bucket_ramps_);
+    layers_.bind(7, tile_state_);
     plan_.bind(0, channel_max_);
     plan_.bind(1, dispatch_args_);
-    bind_convolution(far_horizontal_, far_taps_, far_layer_);
-    bind_convolution(far_vertical_, far_taps_, far_layer_);
-    bind_convolution(near_horizontal_, near_taps_, near_layer_);
-    bind_convolution(near_vertical_, near_taps_, near_layer_);
-    far_horizontal_.bind(10, far_layer_texels_);
-    near_horizontal_.bind(10, near_layer_texels_);
-    for (vk::ComputePipeline* v : {&far_vertical_, &near_vertical_}) {
-      v->bind(10, frame.color);
-      v->bind(11, frame.output);
-      // Bindings past the component count are never read; they only need a valid view.
-      for (std::uint32_t c = 0; c < 6; ++c) v->bind(12 + c, inter_texels_[std::min<std::size_t>(c, inter_.size() - 1)]);
-      v->bind(18, box_texels_);
+    plan_.bind(2, tile_state_);
+    for (vk::ComputePipeline* t : {&tile_rows_, &tile_columns_}) {
+      t->bind(0, tile_state_);
+      t->bind(1, tile_lists_);
+      t->bind(2, bucket_ramps_);
+    }
+    const std::string horizontal = std::string("circular/horizontal_") + to_string(precision);
+    const std::string vertical = std::string("circular/vertical_") + to_string(precision);
+    for (int field : {kFarLayer, kNearLayer}) {
+      const int n = field == kFarLayer ? far_components : near_components;
+      const vk::Buffer& layer = field == kFarLayer ? far_layer_ : near_layer_;
+      const vk::TexelView& layer_texels = field == kFarLayer ? far_layer_texels_ : near_layer_texels_;
+      // Fixed: one kernel at the max radius (bucket 0); radius-following: one per bucket.
+      std::vector<std::pair<int, float>> kernels = {{0, static_cast<float>(max_radius_px)}};
+      if (adaptive) {
+        kernels.clear();
+        for (int k = 1; k <= buckets_.count(); ++k) kernels.push_back({k, buckets_.disc_radius_px[k - 1]});
+      }
+      for (const auto& [bucket, disc] : kernels) {
+        CircularKernel kernel = make_circular_kernel_for_disc(n, disc);
+        vk::Buffer taps = upload_uniform(kernel_block(kernel, field), "circular kernel taps");
+        // Buckets take their field from the kernel block: far and near share equal pipelines.
+        const int spec_layer = bucket > 0 ? 0 : field;
+        const auto horizontal_spec = spec(kernel, spec_layer, kHorizontalOutputs, shape, bucket, buckets_.count());
+        const auto vertical_spec = spec(kernel, spec_layer, kVerticalOutputs, shape, bucket, buckets_.count());
+        auto passes = std::make_unique<BucketPasses>(BucketPasses{
+            std::move(kernel), std::move(taps),
+            vk::ComputePipeline(frame.ctx, vk::spirv(horizontal), horizontal_bindings(), sizeof(PassParams),
+                                horizontal_spec),
+            vk::ComputePipeline(frame.ctx, vk::spirv(vertical), vertical_bindings(), sizeof(PassParams),
+                                vertical_spec)});
+        bind_convolution(passes->horizontal, passes->taps, layer);
+        bind_convolution(passes->vertical, passes->taps, layer);
+        passes->horizontal.bind(10, layer_texels);
+        passes->horizontal.bind(11, tile_lists_);
+        passes->vertical.bind(10, frame.color);
+        passes->vertical.bind(11, frame.output);
+        // Bindings past the component count are never read; they only need a valid view.
+        for (std::uint32_t c = 0; c < 6; ++c)
+          passes->vertical.bind(12 + c, inter_texels_[std::min<std::size_t>(c, inter_.size() - 1)]);
+        passes->vertical.bind(18, box_texels_);
+        passes->vertical.bind(19, field_sum_);
+        passes->vertical.bind(20, tile_lists_);
+        fields_[field].push_back(std::move(passes));
+      }
+      if (adaptive) {
+        auto composite = std::make_unique<vk::ComputePipeline>(
+            frame.ctx, vk::spirv("circular/composite"), std::vector<VkDescriptorType>(5, kBuffer),
+            sizeof(PassParams), std::vector<std::int32_t>{field});
+        composite->bind(0, frame.color);
+        composite->bind(1, far_layer_);
+        composite->bind(2, near_layer_);
+        composite->bind(3, field_sum_);
+        composite->bind(4, frame.output);
+        composites_[field] = std::move(composite);
+      }
     }
   }
 
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
-    // The maxima are reduced with atomicMax: start from 0 every frame.
-    vkCmdFillBuffer(cmd, channel_max_.get(), 0, VK_WHOLE_SIZE, 0);
-    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
-                         nullptr, 0, nullptr);
+    // The maxima are reduced with atomicMax (the masks with atomicOr), the tile lists counted with
+    // atomicAdd: start from 0 every frame.
+    fill_zero(cmd, channel_max_);
+    if (adaptive_) fill_zero(cmd, tile_state_);
     const PassParams* params = &frame_.params;
     const std::uint32_t w = frame_.width(), h = frame_.height();
     layers_.dispatch(cmd, params, w, h);
-    const VkDispatchIndirectCommand hg = far_horizontal_.groups(horizontal_invocations(w), h);
-    const VkDispatchIndirectCommand vg = near_vertical_.groups(w, vertical_invocations(h));
+    const BucketPasses& first = *fields_[kFarLayer].front();
+    const VkDispatchIndirectCommand hg = first.horizontal.groups(horizontal_invocations(w), h);
+    const VkDispatchIndirectCommand vg = first.vertical.groups(w, vertical_invocations(h));
     const PlanGroups groups{hg.x, hg.y, vg.x, vg.y};
+    if (adaptive_) {
+      timer.end_pass(cmd, "layers");
+      const std::uint32_t columns = (w + kTilePx - 1) / kTilePx, rows = (h + kTilePx - 1) / kTilePx;
+      tile_rows_.dispatch(cmd, params, columns, rows);
+      tile_columns_.dispatch(cmd, params, columns, rows);
+      plan_.dispatch(cmd, &groups, 1, 1);
+      timer.end_pass(cmd, "tiles");
+      for (int field : {kFarLayer, kNearLayer}) {
+        fill_zero(cmd, field_sum_);
+        for (int k = 1; k <= buckets_.count(); ++k) {
+          const BucketPasses& b = *fields_[field][k - 1];
+          b.horizontal.dispatch_indirect(cmd, params, dispatch_args_, bucket_args(field, k, 0));
+          b.vertical.dispatch_indirect(cmd, params, dispatch_args_, bucket_args(field, k, 1));
+        }
+        composites_[field]->dispatch(cmd, params, w, h);
+        timer.end_pass(cmd, field == kFarLayer ? "far" : "near");
+      }
+      return;
+    }
     plan_.dispatch(cmd, &groups, 1, 1);
     timer.end_pass(cmd, "layers");
-    far_horizontal_.dispatch_indirect(cmd, params, dispatch_args_, kFarHorizontalArgs);
+    const BucketPasses& far = *fields_[kFarLayer].front();
+    const BucketPasses& near = *fields_[kNearLayer].front();
+    far.horizontal.dispatch_indirect(cmd, params, dispatch_args_, kFarHorizontalArgs);
     timer.end_pass(cmd, "far_horizontal");
-    far_vertical_.dispatch(cmd, params, w, vertical_invocations(h));
+    far.vertical.dispatch(cmd, params, w, vertical_invocations(h));
     timer.end_pass(cmd, "far_vertical");
-    near_horizontal_.dispatch_indirect(cmd, params, dispatch_args_, kNearHorizontalArgs);
+    near.horizontal.dispatch_indirect(cmd, params, dispatch_args_, kNearHorizontalArgs);
     timer.end_pass(cmd, "near_horizontal");
-    near_vertical_.dispatch_indirect(cmd, params, dispatch_args_, kNearVerticalArgs);
+    near.vertical.dispatch_indirect(cmd, params, dispatch_args_, kNearVerticalArgs);
     timer.end_pass(cmd, "near_vertical");
   }
 
   std::uint64_t intermediate_bytes() const override {
     std::uint64_t bytes = far_layer_.allocated_bytes() + near_layer_.allocated_bytes() +
                           channel_max_.allocated_bytes() + box_.allocated_bytes() + dispatch_args_.allocated_bytes() +
-                          far_taps_.allocated_bytes() + near_taps_.allocated_bytes();
+                          bucket_ramps_.allocated_bytes();
+    if (adaptive_)
+      bytes += field_sum_.allocated_bytes() + tile_state_.allocated_bytes() + tile_lists_.allocated_bytes();
+    for (const auto& field : fields_)
+      for (const auto& b : field) bytes += b->taps.allocated_bytes();
     for (const vk::Buffer& b : inter_) bytes += b.allocated_bytes();
     return bytes;
+  }
+
+  // Radius-following: the buckets and tiles the last frame ran (its masks and tile lists, read back).
+  nlohmann::json stats() override {
+    if (!adaptive_) return nlohmann::json::object();
+    std::uint32_t words[10] = {};
+    vk::download(frame_.ctx, channel_max_, words, sizeof words);
+    const int w = static_cast<int>(frame_.width()), h = static_cast<int>(frame_.height());
+    const int columns = (w + kTilePx - 1) / kTilePx, rows = (h + kTilePx - 1) / kTilePx, tiles = columns * rows;
+    std::vector<std::uint32_t> counts(kListCounts);
+    std::vector<std::uint32_t> lists(static_cast<std::size_t>(tile_list_index(1, buckets_.count(), 1) + 1) * tiles);
+    vk::download(frame_.ctx, tile_state_, counts.data(), counts.size() * 4);
+    vk::download(frame_.ctx, tile_lists_, lists.data(), lists.size() * 4);
+    AdaptiveWork work;
+    work.tiles = tiles;
+    for (int f = 0; f < 2; ++f) {
+      work.bucket_mask[f] = words[8 + f];
+      for (int k = 1; k <= buckets_.count(); ++k) {
+        const CircularKernel& kernel = fields_[f][k - 1]->kernel;
+        const double taps = kernel.components * (2.0 * kernel.radius_px + 1);
+        int computed = 0, zeroed = 0, vertical = 0;
+        for (int pass = 0; pass < 2; ++pass) {
+          const int list = tile_list_index(f, k, pass);
+          for (std::uint32_t e = 0; e < counts[list]; ++e) {
+            const std::uint32_t entry = lists[static_cast<std::size_t>(list) * tiles + e];
+            const int t = static_cast<int>(entry & ~kZeroTile);
+            const double pixels = static_cast<double>(std::min(kTilePx, w - (t % columns) * kTilePx)) *
+                                  std::min(kTilePx, h - (t / columns) * kTilePx);
+            int& count = pass == 1 ? vertical : (entry & kZeroTile) ? zeroed : computed;
+            ++count;
+            if (pass == 1 || !(entry & kZeroTile)) work.taps[f] += pixels * taps;
+          }
+        }
+        work.horizontal_tiles[f].push_back(computed);
+        work.zero_tiles[f].push_back(zeroed);
+        work.vertical_tiles[f].push_back(vertical);
+      }
+    }
+    return bucket_stats(buckets_, work);
   }
 
  private:
@@ -227,16 +416,30 @@ class Circular final : public gpu::GpuFilter {
   }
   static std::uint32_t vertical_invocations(std::uint32_t h) { return (h + kVerticalOutputs - 1) / kVerticalOutputs; }
   VkDeviceSize pixels() const { return static_cast<VkDeviceSize>(frame_.width()) * frame_.height(); }
+  VkDeviceSize tiles() const {
+    return static_cast<VkDeviceSize>((frame_.width() + kTilePx - 1) / kTilePx) *
+           ((frame_.height() + kTilePx - 1) / kTilePx);
+  }
 
   vk::Buffer make_texel_buffer(VkDeviceSize bytes, const char* what) {
     return vk::make_storage_buffer(frame_.ctx, bytes, what, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT);
   }
 
-  vk::Buffer upload_kernel(const CircularKernel& k) {
-    const std::vector<float> block = kernel_block(k);
-    vk::Buffer buffer = vk::make_uniform_buffer(frame_.ctx, block.size() * sizeof(float), "circular kernel taps");
-    vk::upload(frame_.ctx, buffer, block.data(), block.size() * sizeof(float));
+  template <class T>
+  vk::Buffer upload_uniform(const std::vector<T>& block, const char* what) {
+    vk::Buffer buffer = vk::make_uniform_buffer(frame_.ctx, block.size() * sizeof(T), what);
+    vk::upload(frame_.ctx, buffer, block.data(), block.size() * sizeof(T));
     return buffer;
+  }
+
+  // Zeroes `buffer` once every earlier pass is done with it, before any later pass uses it.
+  static void fill_zero(VkCommandBuffer cmd, const vk::Buffer& buffer) {
+    vkCmdFillBuffer(cmd, buffer.get(), 0, VK_WHOLE_SIZE, 0);
+    VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
+                         nullptr, 0, nullptr);
   }
 
   void bind_convolution(vk::ComputePipeline& pass, const vk::Buffer& taps, const vk::Buffer& layer) {
@@ -249,12 +452,17 @@ class Circular final : public gpu::GpuFilter {
   }
 
   GpuFrame& frame_;
-  CircularKernel far_kernel_, near_kernel_;
-  vk::Buffer far_layer_, near_layer_, channel_max_, box_, dispatch_args_, far_taps_, near_taps_;
+  bool adaptive_;
+  CircularBuckets buckets_;
+  vk::Buffer far_layer_, near_layer_, channel_max_, box_, field_sum_, dispatch_args_, bucket_ramps_, tile_state_,
+      tile_lists_;
   vk::TexelView far_layer_texels_, near_layer_texels_, box_texels_;
   std::vector<vk::Buffer> inter_;
   std::vector<vk::TexelView> inter_texels_;
-  vk::ComputePipeline layers_, plan_, far_horizontal_, far_vertical_, near_horizontal_, near_vertical_;
+  vk::ComputePipeline layers_, plan_, tile_rows_, tile_columns_;
+  // Per field (far, near): one kernel's passes (fixed) or one per bucket (radius-following).
+  std::vector<std::unique_ptr<BucketPasses>> fields_[2];
+  std::unique_ptr<vk::ComputePipeline> composites_[2];
 };
 
 }  // namespace

@@ -1,6 +1,8 @@
 #pragma once
 // The circular separable filters on the GPU (circular_gpu.cpp): passes layers, far_horizontal,
-// far_vertical, near_horizontal, near_vertical.
+// far_vertical, near_horizontal, near_vertical; radius-following (adaptive on): layers, tiles, far,
+// near.
+#include <cstdint>
 #include <memory>
 #include <optional>
 
@@ -27,6 +29,10 @@ std::unique_ptr<gpu::GpuFilter> make_circular_gpu(gpu::GpuFrame& frame, const Fi
 
 // Bytes of one component's intermediate per pixel (RGBA layers), as the GPU stores it.
 std::uint64_t circular_component_bytes_per_pixel(IntermediatePrecision precision);
+
+// Bytes of the radius-following mode's bucket table (uniform; layers.comp and tiles.comp): the
+// ramps and the tile reach of up to 32 buckets.
+inline constexpr std::uint64_t kCircularBucketTableBytes = 2 * 32 * 16;
 
 // Bytes of the uniform buffer holding one kernel (weights, bracketing, taps) on the GPU; must fit
 // the device's maxUniformBufferRange (64 KiB on lavapipe and NVIDIA: a kernel of up to 680 taps a

@@ -25,10 +25,56 @@ int tap_radius(int components, const FilterOptions& o) {
   return make_circular_kernel_for_disc(components, std::max(1.0f, o.pattern.max_radius_px())).radius_px;
 }
 
+bool adaptive(const FilterOptions& o) { return o.integer("adaptive") == 1; }
+
+// The kernels one field convolves with: the max radius's (adaptive off), or every bucket's (on).
+std::vector<CircularKernel> field_kernels(int components, const FilterOptions& o) {
+  const float disc = std::max(1.0f, o.pattern.max_radius_px());
+  if (!adaptive(o)) return {make_circular_kernel_for_disc(components, disc)};
+  std::vector<CircularKernel> kernels;
+  for (float rho : circular_buckets(disc).disc_radius_px)
+    kernels.push_back(make_circular_kernel_for_disc(components, rho));
+  return kernels;
+}
+
+// Tiles of the radius-following mode's lists (kTilePx squares).
+double tile_count(int w, int h) {
+  return std::ceil(static_cast<double>(w) / kTilePx) * std::ceil(static_cast<double>(h) / kTilePx);
+}
+
+// Radius-following: every bucket of both fields on every tile (the model cannot see the scene; a
+// frame runs the buckets its pixels touch on the tiles they reach: its stats list them, with the
+// taps they cost, far below this bound when the scene spans few radii or little area).
+//   layers: as off, plus the per-tile bucket masks (a word per subgroup);
+//   tiles:  the masks spread along rows and columns, and the lists (a word per tile and list);
+//   far, near: per bucket, the horizontal pass (layer in, intermediates out) and the vertical pass
+//           (intermediates in, the field's sum read and written); the sum zeroed first; the
+//           composite reads colour, both layers and the sum and writes (near: reads too) the output.
+std::vector<PassWork> adaptive_work(int far, const FilterOptions& o, int w, int h) {
+  const double px = static_cast<double>(w) * h, tiles = tile_count(w, h);
+  const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
+  const double component = static_cast<double>(circular_component_bytes_per_pixel(precision));
+  const double box = precision == IntermediatePrecision::bracketed10 ? 8 : 0;
+  const int buckets = circular_buckets(std::max(1.0f, o.pattern.max_radius_px())).count();
+  std::vector<PassWork> work = {{"layers", px, px * 36, px * 32},
+                                {"tiles", 0, tiles * 2 * 4 * 2, tiles * 2 * 4 * (1 + 2.0 * buckets)}};
+  for (const auto& [field, c] : {std::pair<std::string, int>{"far", far}, {"near", o.integer("near_components")}}) {
+    PassWork pass{field, 0, px * (16 * 4 + (field == "near" ? 16 : 0)), px * (16 + 16)};
+    for (const CircularKernel& k : field_kernels(c, o)) {
+      pass.taps += 2 * px * c * (2.0 * k.radius_px + 1);
+      pass.bytes_read += px * (16 + c * component + box + 16);
+      pass.bytes_written += px * (c * component + box + 16);
+    }
+    work.push_back(pass);
+  }
+  return work;
+}
+
 // Both fields as if present (the model cannot see the scene): an empty field's passes do no work
 // on either backend (its horizontal and, near, vertical pass dispatch nothing on the GPU; the far
 // vertical pass then only composites).
 std::vector<PassWork> circular_work(int far, const FilterOptions& o, int w, int h) {
+  if (adaptive(o)) return adaptive_work(far, o, w, h);
   const double px = static_cast<double>(w) * h;
   const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
   const double component = static_cast<double>(circular_component_bytes_per_pixel(precision));
@@ -52,21 +98,32 @@ Method circular_method(int components) {
   m.name = m_name(components);
   m.description = std::to_string(components) +
                   "-component circular separable convolution (Garcia 2018): complex-Gaussian horizontal + vertical "
-                  "passes on near/far layers, fixed disc of radius k(N-1)/2";
+                  "passes on near/far layers, fixed disc of radius k(N-1)/2 (adaptive on: a disc of each pixel's "
+                  "own CoC, from kernels 1.5 px apart)";
   m.precisions = {"f32", "f16", "bracketed10"};
   m.samples_pattern = false;
   m.in_default_sweeps = components <= 2;  // 3..6 refine the same algorithm: run them by name
   m.options = {{"near_components",
                 "Circular filters: near-field components (default: the method's own count; circular2 with 1 is "
                 "Garcia's production choice)",
-                static_cast<double>(components), 1, kMaxCircularComponents, true}};
+                static_cast<double>(components), 1, kMaxCircularComponents, true},
+               {"adaptive",
+                "Circular filters: off blurs every pixel with one disc of the max radius, blended by CoC; on "
+                "spreads each pixel over a disc of its own CoC (kernels for radius ranges, Garcia's proposal)",
+                0, 0, 1, true, {"off", "on"}, {0, 1}}};
   m.device = [](const FilterOptions&) {
     vk::DeviceRequirements needs;
     needs.subgroup_arithmetic = true;  // the layers pass reduces channel maxima with subgroupMax
     return needs;
   };
-  m.unsupported = [](const FilterOptions& o, int, int) -> std::string {
+  m.unsupported = [](const FilterOptions& o, int w, int h) -> std::string {
     if (o.pattern.max_radius_px() < 1.0f) return "circular filters need a max radius k (N - 1) / 2 >= 1 px";
+    // A bucket's pass dispatches one workgroup column per listed tile: at most every tile, which
+    // must stay within the 65535 workgroups every device accepts along x (8192 x 8192 does not).
+    if (adaptive(o) && tile_count(w, h) > 65535)
+      return fmt::format("adaptive on lists up to {} tiles of {} px a pass, over the 65535 workgroups a dispatch may "
+                         "count (an image up to about 8000 x 8000 fits)",
+                         tile_count(w, h), kTilePx);
     return "";
   };
   m.cpu_reference = [components](const CpuInput& in) {
@@ -75,7 +132,14 @@ Method circular_method(int components) {
     config.near_components = in.options.integer("near_components");
     config.max_radius_px = static_cast<int>(in.options.pattern.max_radius_px());
     config.precision = intermediate_precision_from_string(in.options.precision);
-    return circular_blur(in.color, in.radius_px, in.depth_m, in.lens.focus_distance_m, config, in.threads);
+    config.adaptive = in.options.integer("adaptive") == 1;
+    if (!config.adaptive)
+      return circular_blur(in.color, in.radius_px, in.depth_m, in.lens.focus_distance_m, config, in.threads);
+    AdaptiveWork work;
+    Image out = circular_blur_adaptive(in.color, in.radius_px, in.depth_m, in.lens.focus_distance_m, config,
+                                       in.threads, in.stats ? &work : nullptr);
+    if (in.stats) *in.stats = bucket_stats(circular_buckets(config.max_radius_px), work);
+    return out;
   };
   m.make_gpu = [components](gpu::GpuFrame& frame, const FilterOptions& o) {
     return make_circular_gpu(frame, o, components);
@@ -85,43 +149,75 @@ Method circular_method(int components) {
     const auto px = static_cast<std::uint64_t>(w) * h;
     const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
     const int near = o.integer("near_components");
-    const float disc = std::max(1.0f, o.pattern.max_radius_px());
-    const std::uint64_t far_kernel = circular_kernel_block_bytes(make_circular_kernel_for_disc(components, disc));
-    const std::uint64_t near_kernel = circular_kernel_block_bytes(make_circular_kernel_for_disc(near, disc));
+    // Every kernel (one a field, or one a bucket and field) has its uniform buffer.
+    std::uint64_t kernels = 0, largest = 0;
+    for (int c : {components, near})
+      for (const CircularKernel& k : field_kernels(c, o)) {
+        kernels += circular_kernel_block_bytes(k);
+        largest = std::max(largest, circular_kernel_block_bytes(k));
+      }
     // The kernels live in uniform buffers: say so before allocating when the device's are too small.
-    if (ctx && std::max(far_kernel, near_kernel) > ctx->info().max_uniform_buffer_range_bytes)
+    if (ctx && largest > ctx->info().max_uniform_buffer_range_bytes)
       throw std::runtime_error(fmt::format("{}: a kernel of {} bytes exceeds {}'s maxUniformBufferRange of {} bytes "
                                            "(a smaller max radius or fewer components fits)",
-                                           m_name(components), std::max(far_kernel, near_kernel), ctx->info().name,
+                                           m_name(components), largest, ctx->info().name,
                                            ctx->info().max_uniform_buffer_range_bytes));
     const std::uint64_t inter = std::max(components, near) * px * circular_component_bytes_per_pixel(precision);
     const std::uint64_t layers = 2 * px * 16, box = precision == IntermediatePrecision::bracketed10 ? px * 8 : 0;
     MemoryUse use;
-    use.bytes = inter + layers + box + far_kernel + near_kernel;
+    use.bytes = inter + layers + box + kernels;
     use.details = {{"component_buffers_bytes", inter},
                    {"near_far_layers_bytes", layers},
                    {"box_sum_bytes", box},
-                   {"kernel_bytes", far_kernel + near_kernel}};
+                   {"kernel_bytes", kernels}};
+    if (adaptive(o)) {
+      // The field's sum (RGBA f32), the bucket table, and the tiles: list counts and two masks per
+      // field and tile, and one list per bucket, field and pass (tiles.glsl).
+      const auto tiles = static_cast<std::uint64_t>(tile_count(w, h));
+      const int buckets = circular_buckets(std::max(1.0f, o.pattern.max_radius_px())).count();
+      const std::uint64_t sum = px * 16, table = kCircularBucketTableBytes;
+      const std::uint64_t tile_bytes =
+          4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
+      use.bytes += sum + table + tile_bytes;
+      use.details["field_sum_bytes"] = sum;
+      use.details["bucket_table_bytes"] = table;
+      use.details["tile_bytes"] = tile_bytes;
+    }
     return use;
   };
   // The near and far RGBA layers, one convolution's intermediates (real and imaginary planes of 4
   // channels per component, held as f32 at every precision) and its blurred RGBA output; near and far
   // convolve one after the other.
+  // Radius-following adds the two fields' sums and the bucket's layer (RGBA f32 each, a bucket's
+  // window at most the frame).
   m.cpu_memory_bytes = [components](const FilterOptions& o, int w, int h) {
     const auto px = static_cast<std::uint64_t>(w) * h;
-    return 2 * px * 4 * sizeof(float) + std::max(components, o.integer("near_components")) * px * 8 * sizeof(float) +
-           px * 4 * sizeof(float);
+    const std::uint64_t fixed = 2 * px * 4 * sizeof(float) +
+                                std::max(components, o.integer("near_components")) * px * 8 * sizeof(float) +
+                                px * 4 * sizeof(float);
+    return fixed + (adaptive(o) ? 3 * px * 4 * sizeof(float) : 0);
   };
   // Same taps, weights and order as the CPU, so f32 differs by rounding only (measured 1.4e-6 at 6
   // components); stored f16 or 10-bit parts may round the other way on the GPU (Vulkan allows either):
   // two units of the storage bound (circular_storage_bound, relative to the largest value).
+  // Radius-following: a pixel's field sum gathers every bucket whose kernel reaches it, each
+  // rounded in storage as above (relative to the field's maxima: rgb <= the largest value, alpha 1),
+  // so the bound sums over the buckets (the larger field's); the composite divides the sum by its
+  // alpha, about 1 inside a field, which at most doubles it (numerator and denominator both off):
+  // 1e-5 + 2 sum_k storage_k. Where a field's coverage is small (an isolated pixel, down to 1e-4) the
+  // division amplifies more, as it does for off; tests/methods/test_gpu_circular.cpp measures both.
+  // Measured on lavapipe: <= 3e-7 of the largest value at every precision (it rounds like the CPU).
   auto storage = [components](const FilterOptions& o, double units) {
     const IntermediatePrecision p = intermediate_precision_from_string(o.precision);
-    const double disc = std::max(1.0f, o.pattern.max_radius_px());
-    return std::max(circular_storage_bound(make_circular_kernel_for_disc(components, disc), p, units),
-                    circular_storage_bound(make_circular_kernel_for_disc(o.integer("near_components"), disc), p, units));
+    double bound = 0;
+    for (int c : {components, o.integer("near_components")}) {
+      double field = 0;
+      for (const CircularKernel& k : field_kernels(c, o)) field += circular_storage_bound(k, p, units);
+      bound = std::max(bound, field);
+    }
+    return bound;
   };
-  m.gpu_tolerance = [storage](const FilterOptions& o) { return 1e-5 + storage(o, 2); };
+  m.gpu_tolerance = [storage](const FilterOptions& o) { return 1e-5 + (adaptive(o) ? 2 : 1) * storage(o, 2); };
   m.storage_tolerance = [storage](const FilterOptions& o) { return storage(o, 1); };
   // The horizontal pass stores sum_i tap_i J (complex) per component: |Re|, |Im| <= S J with
   // S = max_c sum_i (|Re tap_i| + |Im tap_i|) (about the tap count: S grows with the radius). f16

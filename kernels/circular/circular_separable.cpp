@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <climits>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <type_traits>
@@ -109,7 +112,7 @@ void accumulate_one(const float* src, int stride, const float* tap_re, const flo
 }
 
 Intermediate horizontal_pass(const Image& img, const CircularKernel& k, IntermediatePrecision precision,
-                             int threads) {
+                             int threads, const std::vector<float>* given_max) {
   Intermediate out;
   out.width = img.width, out.height = img.height, out.channels = img.channels, out.components = k.components;
   out.re.assign(static_cast<std::size_t>(k.components) * img.pixels.size(), 0.0f);
@@ -124,6 +127,14 @@ Intermediate horizontal_pass(const Image& img, const CircularKernel& k, Intermed
       if (!(v >= 0.0f)) throw std::invalid_argument("bracketed10 intermediates need non-negative, finite input");
       float& m = channel_max[i % img.channels];
       m = std::max(m, v);
+    }
+    if (given_max) {
+      if (given_max->size() != static_cast<std::size_t>(img.channels))
+        throw std::invalid_argument("bracketed10: one channel maximum per channel expected");
+      for (int ch = 0; ch < img.channels; ++ch)
+        if (!((*given_max)[ch] >= channel_max[ch]))
+          throw std::invalid_argument("bracketed10: a given channel maximum lies below the image's");
+      channel_max = *given_max;
     }
     for (float m : channel_max) inv_max.push_back(m > 0.0f ? 1.0f / m : 0.0f);
     for (const auto& taps : k.taps) {
@@ -286,14 +297,178 @@ IntermediatePrecision intermediate_precision_from_string(const std::string& name
 }
 
 Image circular_convolve(const Image& image, const CircularKernel& kernel, IntermediatePrecision precision,
-                        int threads) {
+                        int threads, const std::vector<float>* channel_max) {
   if (image.channels < 1 || image.width < 1 || image.height < 1)
     throw std::invalid_argument("circular_convolve needs a non-empty image");
-  return vertical_pass(horizontal_pass(image, kernel, precision, threads), kernel, threads);
+  return vertical_pass(horizontal_pass(image, kernel, precision, threads, channel_max), kernel, threads);
+}
+
+CircularBuckets circular_buckets(double max_radius_px) {
+  if (!(max_radius_px >= 1.0) || !std::isfinite(max_radius_px))
+    throw std::invalid_argument("circular buckets need a finite max radius >= 1 px, got " +
+                                std::to_string(max_radius_px));
+  std::vector<double> radii;
+  for (double spacing = kBucketSpacingPx; radii.empty() || static_cast<int>(radii.size()) > kMaxBuckets;
+       spacing *= 1.1) {
+    radii = {kMinBucketRadiusPx};
+    while (radii.back() < max_radius_px - 1e-9)
+      radii.push_back(std::min(radii.back() * kBucketRatio, radii.back() + spacing));
+    // The max radius nearer the one before the last than the last: drop the last, stretch the rest.
+    if (radii.size() > 1 && max_radius_px - radii[radii.size() - 2] < radii.back() - max_radius_px) radii.pop_back();
+    const double stretch = max_radius_px / radii.back();
+    for (double& rho : radii) rho *= stretch;
+  }
+  const double gain = 1.0 / kBucketBlend;
+  CircularBuckets b;
+  double previous = kIdentityRadiusPx;
+  for (double rho : radii) {
+    const double span = rho - previous;
+    b.disc_radius_px.push_back(static_cast<float>(rho));
+    b.ramp_scale.push_back(static_cast<float>(gain / span));
+    b.ramp_offset.push_back(static_cast<float>(gain * previous / span + (gain - 1) / 2));
+    previous = rho;
+  }
+  return b;
+}
+
+float bucket_coordinate(const CircularBuckets& b, float r) {
+  float s = 0.0f;
+  for (int k = 0; k < b.count(); ++k) s += std::clamp(r * b.ramp_scale[k] - b.ramp_offset[k], 0.0f, 1.0f);
+  return s;
+}
+
+Image circular_blur_adaptive(const Image& color, const Image& radius_px, const Image& depth_m,
+                             double focus_distance_m, const CircularFilterConfig& config, int threads,
+                             AdaptiveWork* work) {
+  if (color.channels < 3) throw std::invalid_argument("colour needs at least three channels");
+  check_same_size(color, radius_px, "the CoC radius image");
+  check_same_size(color, depth_m, "the depth image");
+  if (config.max_radius_px < 1)
+    throw std::invalid_argument("circular blur max radius must be >= 1 px, got " +
+                                std::to_string(config.max_radius_px));
+  const CircularBuckets buckets = circular_buckets(config.max_radius_px);
+  const int w = color.width, h = color.height, count = buckets.count();
+  const float focus = static_cast<float>(focus_distance_m);
+  // Layers (rgb, s); per row, the buckets each field touches (bit k: some hat_k > 0).
+  Image layers[2] = {Image(w, h, 4, 0.0f), Image(w, h, 4, 0.0f)};  // far, near
+  std::vector<std::uint32_t> row_masks[2] = {std::vector<std::uint32_t>(h, 0u), std::vector<std::uint32_t>(h, 0u)};
+  std::vector<std::vector<float>> row_max[2] = {std::vector<std::vector<float>>(h, std::vector<float>(4, 0.0f)),
+                                                std::vector<std::vector<float>>(h, std::vector<float>(4, 0.0f))};
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const float* rgb = color.px(x, y);
+      const float s = bucket_coordinate(buckets, *radius_px.px(x, y));
+      const int field = *depth_m.px(x, y) < focus ? 1 : 0;
+      for (int f = 0; f < 2; ++f) {
+        float* l = layers[f].px(x, y);
+        l[3] = kNoBucket;
+        if (f != field || !(s > 0.0f)) continue;
+        std::copy(rgb, rgb + 3, l);
+        l[3] = s;
+        const int lower = static_cast<int>(std::floor(s));
+        row_masks[f][y] |= (1u << lower) | (1u << static_cast<int>(std::ceil(s)));
+        for (int c = 0; c < 3; ++c) row_max[f][y][c] = std::max(row_max[f][y][c], rgb[c]);
+        row_max[f][y][3] = 1.0f;
+      }
+    }
+  });
+  // Per field and bucket, the box holding its pixels (x0, y0, x1, y1; empty when x0 > x1).
+  struct Box {
+    int x0 = INT_MAX, y0 = INT_MAX, x1 = -1, y1 = -1;
+    void add(int x, int y) { x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y); }
+  };
+  std::vector<Box> boxes[2] = {std::vector<Box>(count + 1), std::vector<Box>(count + 1)};
+  for (int f = 0; f < 2; ++f)
+    for (int y = 0; y < h; ++y) {
+      if (!row_masks[f][y]) continue;
+      for (int x = 0; x < w; ++x) {
+        const float s = layers[f].px(x, y)[3];
+        if (!(s > 0.0f)) continue;
+        boxes[f][static_cast<int>(std::floor(s))].add(x, y);
+        boxes[f][static_cast<int>(std::ceil(s))].add(x, y);
+      }
+    }
+  Image sums[2] = {Image(w, h, 4, 0.0f), Image(w, h, 4, 0.0f)};
+  for (int f = 0; f < 2; ++f) {
+    std::uint32_t mask = 0;
+    std::vector<float> field_max(4, 0.0f);
+    for (int y = 0; y < h; ++y) {
+      mask |= row_masks[f][y];
+      for (int c = 0; c < 4; ++c) field_max[c] = std::max(field_max[c], row_max[f][y][c]);
+    }
+    const int components = f == 0 ? config.far_components : config.near_components;
+    for (int k = 1; k <= count; ++k) {
+      if (!(mask & (1u << k))) continue;
+      const CircularKernel kernel = make_circular_kernel_for_disc(components, buckets.disc_radius_px[k - 1]);
+      // Outside its box dilated by the kernel radius, the bucket's response is exactly 0 (as on the
+      // GPU, which skips those tiles): convolve that window only. Inside, the window's borders are
+      // zeros (beyond the box) or the image's own (clamped alike), so the values are the same bits.
+      const Box& b = boxes[f][k];
+      const int r = kernel.radius_px, x0 = std::max(0, b.x0 - r), y0 = std::max(0, b.y0 - r);
+      const int x1 = std::min(w - 1, b.x1 + r), y1 = std::min(h - 1, b.y1 + r);
+      Image bucket(x1 - x0 + 1, y1 - y0 + 1, 4);
+      const float kf = static_cast<float>(k);
+      parallel_rows(bucket.height, threads, [&](int y) {
+        for (int x = 0; x < bucket.width; ++x) {
+          const float* l = layers[f].px(x0 + x, y0 + y);
+          const float hat = std::max(0.0f, 1.0f - std::abs(l[3] - kf));
+          float* d = bucket.px(x, y);
+          for (int c = 0; c < 3; ++c) d[c] = l[c] * hat;
+          d[3] = hat;
+        }
+      });
+      const Image blurred = circular_convolve(bucket, kernel, config.precision, threads, &field_max);
+      parallel_rows(bucket.height, threads, [&](int y) {
+        float* sum = sums[f].px(x0, y0 + y);
+        const float* add = blurred.px(0, y);
+        for (int v = 0; v < bucket.width * 4; ++v) sum[v] += add[v];
+      });
+    }
+  }
+  if (work) {
+    const int components[2] = {config.far_components, config.near_components};
+    std::vector<int> radii[2];
+    for (int f = 0; f < 2; ++f)
+      for (float disc : buckets.disc_radius_px)
+        radii[f].push_back(make_circular_kernel_for_disc(components[f], disc).radius_px);
+    *work = adaptive_tiles(layers[0], layers[1], buckets, radii, components);
+  }
+  Image out(w, h, 3);
+  parallel_rows(h, threads, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      float field_sum[2][4];
+      for (int f = 0; f < 2; ++f) {
+        const float* l = layers[f].px(x, y);
+        const float hat = std::max(0.0f, 1.0f - std::abs(l[3]));  // the identity bucket
+        const float* sum = sums[f].px(x, y);
+        for (int c = 0; c < 3; ++c) field_sum[f][c] = sum[c] + l[c] * hat;
+        field_sum[f][3] = sum[3] + hat;
+      }
+      const bool far = layers[0].px(x, y)[3] > 0.0f, near = layers[1].px(x, y)[3] > 0.0f;
+      const float* sharp = color.px(x, y);
+      const float* far_sum = field_sum[0];
+      const float* near_sum = field_sum[1];
+      const float alpha = std::min(near_sum[3], 1.0f);
+      float o[3];
+      if (near) {
+        const float cover = std::max(std::max(far_sum[3], 1.0f - alpha), kMinFarAlpha);
+        for (int c = 0; c < 3; ++c) o[c] = far_sum[c] / cover;
+      } else if (far && far_sum[3] > kMinFarAlpha) {
+        for (int c = 0; c < 3; ++c) o[c] = far_sum[c] / far_sum[3];
+      } else {
+        std::copy(sharp, sharp + 3, o);
+      }
+      for (int c = 0; c < 3; ++c)
+        o[c] = near_sum[3] < 1.0f ? (1.0f - alpha) * o[c] + near_sum[c] : near_sum[c] / near_sum[3];
+      std::copy(o, o + 3, out.px(x, y));
+    }
+  });
+  return out;
 }
 
 Image circular_blur(const Image& color, const Image& radius_px, const Image& depth_m, double focus_distance_m,
                     const CircularFilterConfig& config, int threads) {
+  if (config.adaptive) return circular_blur_adaptive(color, radius_px, depth_m, focus_distance_m, config, threads);
   if (color.channels < 3) throw std::invalid_argument("colour needs at least three channels");
   check_same_size(color, radius_px, "the CoC radius image");
   check_same_size(color, depth_m, "the depth image");
@@ -348,6 +523,83 @@ Image circular_blur(const Image& color, const Image& radius_px, const Image& dep
     });
   }
   return out;
+}
+
+AdaptiveWork adaptive_tiles(const Image& far_layer, const Image& near_layer, const CircularBuckets& buckets,
+                            const std::vector<int> (&tap_radius_px)[2], const int (&components)[2]) {
+  const int w = far_layer.width, h = far_layer.height, count = buckets.count();
+  const int columns = (w + kTilePx - 1) / kTilePx, rows = (h + kTilePx - 1) / kTilePx;
+  AdaptiveWork work;
+  work.tiles = columns * rows;
+  const auto tile_pixels = [&](int t) {
+    return static_cast<double>(std::min(kTilePx, w - (t % columns) * kTilePx)) *
+           std::min(kTilePx, h - (t / columns) * kTilePx);
+  };
+  const Image* layers[2] = {&far_layer, &near_layer};
+  for (int f = 0; f < 2; ++f) {
+    // Bits floor(s) and ceil(s) of every pixel, per tile (layers.comp), then each bucket's bits
+    // spread along the tile row by its reach (tiles.comp, STEP 0).
+    std::vector<std::uint32_t> raw(work.tiles, 0u), row(work.tiles, 0u);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float s = layers[f]->px(x, y)[3];
+        if (!(s > 0.0f)) continue;
+        const std::uint32_t bits = (1u << static_cast<int>(std::floor(s))) | (1u << static_cast<int>(std::ceil(s)));
+        raw[(y / kTilePx) * columns + x / kTilePx] |= bits;
+        work.bucket_mask[f] |= bits;
+      }
+    const auto reach = [&](int k) { return (tap_radius_px[f][k - 1] + kTilePx - 1) / kTilePx; };
+    for (int ty = 0; ty < rows; ++ty)
+      for (int tx = 0; tx < columns; ++tx)
+        for (int k = 1; k <= count; ++k)
+          for (int x = std::max(tx - reach(k), 0); x <= std::min(tx + reach(k), columns - 1); ++x)
+            row[ty * columns + tx] |= raw[ty * columns + x] & (1u << k);
+    work.horizontal_tiles[f].assign(count, 0);
+    work.zero_tiles[f].assign(count, 0);
+    work.vertical_tiles[f].assign(count, 0);
+    for (int k = 1; k <= count; ++k) {
+      const std::uint32_t bit = 1u << k;
+      const double taps = components[f] * (2.0 * tap_radius_px[f][k - 1] + 1);
+      for (int ty = 0; ty < rows; ++ty)
+        for (int tx = 0; tx < columns; ++tx) {
+          bool vertical = false, read = false;
+          for (int y = std::max(ty - 2 * reach(k), 0); y <= std::min(ty + 2 * reach(k), rows - 1); ++y) {
+            const bool in_row = (row[y * columns + tx] & bit) != 0;
+            read = read || in_row;
+            vertical = vertical || (in_row && std::abs(y - ty) <= reach(k));
+          }
+          const int t = ty * columns + tx;
+          const bool own = (row[t] & bit) != 0;
+          if (read && own) ++work.horizontal_tiles[f][k - 1], work.taps[f] += tile_pixels(t) * taps;
+          if (read && !own) ++work.zero_tiles[f][k - 1];
+          if (vertical) ++work.vertical_tiles[f][k - 1], work.taps[f] += tile_pixels(t) * taps;
+        }
+    }
+  }
+  return work;
+}
+
+nlohmann::json bucket_stats(const CircularBuckets& buckets, const AdaptiveWork& work) {
+  nlohmann::json stats = {{"bucket_radii_px", buckets.disc_radius_px}, {"tiles", work.tiles}};
+  for (int f = 0; f < 2; ++f) {
+    std::vector<float> radii;
+    std::vector<int> horizontal, zero, vertical;
+    for (int k = 1; k <= buckets.count(); ++k) {
+      if (!(work.bucket_mask[f] & (1u << k))) continue;
+      radii.push_back(buckets.disc_radius_px[k - 1]);
+      horizontal.push_back(work.horizontal_tiles[f][k - 1]);
+      zero.push_back(work.zero_tiles[f][k - 1]);
+      vertical.push_back(work.vertical_tiles[f][k - 1]);
+    }
+    const std::string field = f == 0 ? "far_" : "near_";
+    stats[field + "buckets_run"] = radii.size();
+    stats[field + "bucket_radii_px"] = radii;
+    stats[field + "horizontal_tiles"] = horizontal;
+    stats[field + "zero_tiles"] = zero;
+    stats[field + "vertical_tiles"] = vertical;
+    stats[field + "taps"] = work.taps[f];
+  }
+  return stats;
 }
 
 CircularCost circular_cost(int components, int radius_px, IntermediatePrecision precision, int channels) {

@@ -11,7 +11,9 @@
 
 layout(constant_id = 0) const int COMPONENTS = 1;  // 1..6
 layout(constant_id = 1) const int RADIUS = 1;      // kernel radius R: taps at -R..R
-layout(constant_id = 2) const int LAYER = 0;       // 0 far, 1 near: which channel maxima M to use
+// 0 far, 1 near: which channel maxima M to use. Buckets read their field from their kernel block
+// instead (field() below), so a far and a near bucket with the same kernel share one pipeline.
+layout(constant_id = 2) const int LAYER = 0;
 layout(constant_id = 3) const int OUTPUTS = 1;     // output pixels per invocation along the pass
 // How a pass loads (both are on for lavapipe, off for GPUs; circular_gpu.cpp says why):
 //   TEXEL_LOADS     its input (layer or intermediates) through uniform texel buffers (texelFetch)
@@ -22,6 +24,27 @@ layout(constant_id = 3) const int OUTPUTS = 1;     // output pixels per invocati
 // Every output pixel sums its taps in the same order either way: the results are bit-identical.
 layout(constant_id = 4) const bool TEXEL_LOADS = false;
 layout(constant_id = 5) const bool SLIDING_WINDOW = false;
+// 0: the fixed-kernel filter (layer = (rgb w, w)). k >= 1: bucket k of the radius-following filter
+// (circular_blur_adaptive): the layer holds (rgb, s) and the horizontal pass convolves
+// (rgb, 1) max(0, 1 - |s - k|); the vertical pass adds its result to the field's sum instead of
+// compositing.
+layout(constant_id = 6) const int BUCKET = 0;
+// Buckets run over the tiles their lists name (tiles.comp): one workgroup per entry and quarter of
+// a 32 x 32 tile (gl_WorkGroupID.y), so TILE_PX = local size x OUTPUTS = 4 x local size across.
+layout(constant_id = 7) const int BUCKETS = 1;
+
+#include "tiles.glsl"
+
+// The tile-list entry of this workgroup (bucket passes only); `pass` 0 horizontal, 1 vertical.
+// Indexed by the workgroup id, so the entry (and a branch on it) is uniform across the workgroup.
+#define TILE_ENTRY(pass)                                                                              \
+  tile_list[tile_list_index(field(), BUCKET, pass) * tile_grid(params.width_px, params.height_px).x *   \
+                tile_grid(params.width_px, params.height_px).y +                                      \
+            gl_WorkGroupID.x]
+ivec2 tile_origin(uint entry) {
+  const int tile = int(entry & ~ZERO_TILE), columns = tile_grid(params.width_px, params.height_px).x;
+  return ivec2(tile % columns, tile / columns) * TILE_PX;
+}
 
 const int TAPS = 2 * RADIUS + 1;
 const float UNORM10_MAX = 1023.0;
@@ -30,10 +53,12 @@ const float UNORM10_MAX = 1023.0;
 // loads (a storage-buffer load in a loop is a per-lane loop) and GPUs serve from their constant
 // caches.
 layout(std140, binding = 0) uniform Kernel {
-  vec4 weight[6];                // (A / normalisation, B / normalisation, 0, 0)
+  vec4 weight[6];                // (A / normalisation, B / normalisation, 0, 0); weight[0].z: the field
   vec4 bracket[6];               // (O_re, S_re, O_im, S_im): Garcia's bracketing of Re F and Im F
   vec4 taps[COMPONENTS * TAPS];  // [c * TAPS + i]: (Re F, Im F, G'_re, G'_im), i = x + R
 } kernel;
+
+int field() { return BUCKET > 0 ? int(kernel.weight[0].z) : LAYER; }
 
 // Written by layers.comp: per-channel maxima M of the far (0..3) and near (4..7) RGBA layers as
 // float bits (non-negative floats order like their bits). The alpha maxima are always there (a
@@ -64,7 +89,7 @@ layout(std430, binding = 9) buffer Inter5 { INTER_T d[]; } inter5;
 #define FOR_EACH_COMPONENT(X) X(0, inter0) X(1, inter1) X(2, inter2) X(3, inter3) X(4, inter4) X(5, inter5)
 
 vec4 channel_max() {
-  const int o = 4 * LAYER;
+  const int o = 4 * field();
   return vec4(uintBitsToFloat(max_bits[o]), uintBitsToFloat(max_bits[o + 1]), uintBitsToFloat(max_bits[o + 2]),
               uintBitsToFloat(max_bits[o + 3]));
 }

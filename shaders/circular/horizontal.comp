@@ -10,6 +10,7 @@
 #include "convolution.glsl"
 
 layout(binding = 10) uniform samplerBuffer layer_texels;  // the layer again, read when TEXEL_LOADS
+layout(std430, binding = 11) readonly restrict buffer TileLists { uint tile_list[]; };  // buckets: tiles.glsl
 
 #if PRECISION == 2
 #define TAP_RE t.z  // G'_re
@@ -19,16 +20,27 @@ layout(binding = 10) uniform samplerBuffer layer_texels;  // the layer again, re
 #define TAP_IM t.y  // Im F
 #endif
 
-// J(x, y) of this row, x clamped to the image.
+// J(x, y) of this row, x clamped to the image; for a bucket, the layer's share in it (as
+// circular_blur_adaptive: the hat weight times (rgb, 1)).
 vec4 load_layer(uint row, int x) {
   const uint i = row + uint(clamp(x, 0, params.width_px - 1));
-  return TEXEL_LOADS ? texelFetch(layer_texels, int(i)) : layer[i];
+  const vec4 v = TEXEL_LOADS ? texelFetch(layer_texels, int(i)) : layer[i];
+  if (BUCKET == 0) return v;
+  return vec4(v.rgb, 1.0) * max(0.0, 1.0 - abs(v.a - float(BUCKET)));
 }
 
 void main() {
   // This invocation computes OUTPUTS pixels along row y from column x0: each layer value it loads
   // serves up to OUTPUTS taps. Per output pixel the sum runs over i = 0..TAPS-1 in order.
-  const int x0 = int(gl_GlobalInvocationID.x) * OUTPUTS, y = int(gl_GlobalInvocationID.y);
+  int x0 = int(gl_GlobalInvocationID.x) * OUTPUTS, y = int(gl_GlobalInvocationID.y);
+  bool zero = false;  // a tile whose response is 0 but which the vertical pass reads: store zeros
+  if (BUCKET > 0) {
+    const uint entry = TILE_ENTRY(0);
+    const ivec2 origin = tile_origin(entry);
+    x0 = origin.x + int(gl_LocalInvocationID.x) * OUTPUTS;
+    y = origin.y + int(gl_WorkGroupID.y * gl_WorkGroupSize.y + gl_LocalInvocationID.y);
+    zero = (entry & ZERO_TILE) != 0u;
+  }
   if (x0 >= params.width_px || y >= params.height_px) return;
   const uint row = uint(y * params.width_px);
 #define DECLARE(c, buf)                                     \
@@ -44,7 +56,9 @@ void main() {
     re##c[k] += TAP_RE * j;                    \
     im##c[k] += TAP_IM * j;                    \
   }
-  if (SLIDING_WINDOW) {
+  if (zero) {
+    // The accumulators stay 0.
+  } else if (SLIDING_WINDOW) {
     // window[k] = J(x0 + k + i - R), the value output k takes at tap i: one new load per tap.
     vec4 window[OUTPUTS];
     for (int k = 1; k < OUTPUTS; ++k) window[k] = load_layer(row, x0 + k - 1 - RADIUS);

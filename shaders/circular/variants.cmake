@@ -1,6 +1,7 @@
 # Circular separable filters: intermediates f32, f16, bracketed10 (PRECISION 0, 1, 2; see
 # convolution.glsl), one horizontal and one vertical pass each; the near/far split (layers) and the
-# indirect dispatch sizes of the convolution passes (plan).
+# indirect dispatch sizes of the convolution passes (plan); the radius-following mode's tile lists
+# (tiles) and per-field composite (composite).
 set(precisions f32 f16 bracketed10)
 foreach(precision IN LISTS precisions)
   list(FIND precisions ${precision} precision_id)
@@ -9,3 +10,5 @@ foreach(precision IN LISTS precisions)
 endforeach()
 bokeh_shader(circular layers layers.comp)
 bokeh_shader(circular plan plan.comp)
+bokeh_shader(circular tiles tiles.comp)
+bokeh_shader(circular composite composite.comp)

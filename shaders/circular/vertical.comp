@@ -1,7 +1,9 @@
 #version 450
-// Circular separable filter, vertical pass and composite. Per component, V_c = sum_j F_c(j) H_c(x, y + j)
-// (complex products, borders clamp); the blurred layer is b = sum_c A_c Re V_c + B_c Im V_c (A, B
-// already divided by the kernel's normalisation). Then, as circular_blur() on the CPU:
+// Circular separable filter, vertical pass and composite (for a bucket of the radius-following
+// filter: the vertical pass, added to the field's sum over its tiles; composite.comp composites).
+// Per component, V_c = sum_j F_c(j) H_c(x, y + j) (complex products, borders clamp); the blurred
+// layer is b = sum_c A_c Re V_c + B_c Im V_c (A, B already divided by the kernel's normalisation).
+// Then, as circular_blur() on the CPU:
 //   LAYER 0 (far, runs first): out = sharp colour; where the pixel's own far alpha a > 0 and
 //     b.a > 1e-4, out = (1 - a) sharp + a b.rgb / b.a. Writes every output pixel.
 //   LAYER 1 (near, runs last): alpha = clamp(b.a, 0, 1); where alpha > 0,
@@ -29,6 +31,8 @@ layout(binding = 15) uniform TEXELS inter_texels3;
 layout(binding = 16) uniform TEXELS inter_texels4;
 layout(binding = 17) uniform TEXELS inter_texels5;
 layout(binding = 18) uniform usamplerBuffer box_texels;
+layout(std430, binding = 19) buffer Sum { vec4 field_sum[]; };  // BUCKET >= 1: the field's sum over buckets
+layout(std430, binding = 20) readonly restrict buffer TileLists { uint tile_list[]; };  // buckets: tiles.glsl
 
 const float MIN_FAR_ALPHA = 1e-4;  // kMinFarAlpha in kernels/circular/circular_separable.cpp
 
@@ -71,7 +75,12 @@ vec4 load_box(uint source, vec4 m) {
 void main() {
   // This invocation computes OUTPUTS pixels down column x from row y0: each H value it loads serves up
   // to OUTPUTS taps. Per output pixel the sum runs over j = 0..TAPS-1 in order, as on the CPU.
-  const int x = int(gl_GlobalInvocationID.x), y0 = int(gl_GlobalInvocationID.y) * OUTPUTS;
+  int x = int(gl_GlobalInvocationID.x), y0 = int(gl_GlobalInvocationID.y) * OUTPUTS;
+  if (BUCKET > 0) {
+    const ivec2 origin = tile_origin(TILE_ENTRY(1));
+    x = origin.x + int(gl_WorkGroupID.y * gl_WorkGroupSize.x + gl_LocalInvocationID.x);
+    y0 = origin.y + int(gl_LocalInvocationID.y) * OUTPUTS;
+  }
   if (x >= params.width_px || y0 >= params.height_px) return;
   const vec4 m = PRECISION == 2 ? channel_max() : vec4(0.0);
 #define DECLARE(c, buf)                                            \
@@ -80,7 +89,7 @@ void main() {
   FOR_EACH_COMPONENT(DECLARE)
   // Row sy of the intermediates, clamped to the image.
 #define SOURCE(row) uint(clamp(row, 0, params.height_px - 1) * params.width_px + x)
-  const bool field_present = max_bits[4 * LAYER + 3] != 0u;
+  const bool field_present = max_bits[4 * field() + 3] != 0u;
   if (field_present && SLIDING_WINDOW) {
     // window_re/im##c[k] = H_c(x, y0 + k + j - R), the value output k takes at tap j.
 #define DECLARE_WINDOW(c, buf) vec4 window_re##c[OUTPUTS], window_im##c[OUTPUTS];
@@ -146,7 +155,9 @@ void main() {
     FOR_EACH_COMPONENT(COMBINE)
 
     const uint i = uint(y * params.width_px + x);
-    if (LAYER == 0) {
+    if (BUCKET > 0) {
+      field_sum[i] += b;  // buckets in ascending order, as the CPU sums them
+    } else if (LAYER == 0) {
       vec3 o = color[i].rgb;
       const float a = layer[i].a;
       if (a > 0.0 && b.a > MIN_FAR_ALPHA) o = (1.0 - a) * o + a * b.rgb / b.a;

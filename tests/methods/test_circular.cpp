@@ -2,9 +2,11 @@
 // figures, disc size, intermediate precision bounds, and the per-pixel CoC near/far composite.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
 
@@ -12,6 +14,7 @@
 
 #include "circular_coefficients.hpp"
 #include "circular_separable.hpp"
+#include "method.hpp"
 #include "test_support.hpp"
 
 namespace bokeh {
@@ -328,6 +331,262 @@ TEST(CircularBlur, FarFieldStaysBehindSharpPixelsNearFieldSpreadsOverThem) {
       EXPECT_GT(change, 0.05);
     }
   }
+}
+
+// ---- Radius-following filter (adaptive on: circular_blur_adaptive) ----
+
+TEST(CircularBuckets, RadiiAndCoordinateFollowTheDefinition) {
+  for (double max_radius : {1.0, 1.3, 6.0, 40.0, 43.0, 160.0}) {
+    const CircularBuckets b = circular_buckets(max_radius);
+    ASSERT_GE(b.count(), 1);
+    EXPECT_LE(b.count(), kMaxBuckets);
+    EXPECT_FLOAT_EQ(b.disc_radius_px.back(), static_cast<float>(max_radius));
+    EXPECT_NEAR(b.disc_radius_px.front(), kMinBucketRadiusPx, 0.35) << max_radius;  // stretched a little
+    for (int k = 1; k < b.count(); ++k) {
+      const double step = b.disc_radius_px[k] - b.disc_radius_px[k - 1];
+      EXPECT_GT(step, 0.0);
+      EXPECT_LE(b.disc_radius_px[k] / b.disc_radius_px[k - 1], kBucketRatio * 1.2) << max_radius << ", " << k;
+      // Steps of at most 1.5 px (stretched a little) up to ~43 px; wider beyond, to fit the masks.
+      if (max_radius <= 40) {
+        EXPECT_LE(step, kBucketSpacingPx * 1.1) << max_radius << ", " << k;
+      }
+    }
+    // s = 0 up to the identity radius, k at rho_k, k - 1/2 in the middle of an interval,
+    // exactly k - 1 or k outside its middle band, K from the max radius on.
+    EXPECT_EQ(bucket_coordinate(b, 0.0f), 0.0f);
+    EXPECT_EQ(bucket_coordinate(b, kIdentityRadiusPx), 0.0f);
+    for (int k = 1; k <= b.count(); ++k) {
+      const float rho = b.disc_radius_px[k - 1], previous = k > 1 ? b.disc_radius_px[k - 2] : kIdentityRadiusPx;
+      const auto at = [&](double t) { return static_cast<float>(previous + t * (rho - previous)); };
+      EXPECT_NEAR(bucket_coordinate(b, rho), k, 1e-4) << "max " << max_radius << ", bucket " << k;
+      EXPECT_NEAR(bucket_coordinate(b, at(0.5)), k - 0.5, 1e-4) << "max " << max_radius << ", bucket " << k;
+      EXPECT_NEAR(bucket_coordinate(b, at(0.5 - kBucketBlend / 2 - 0.02)), k - 1, 1e-5) << max_radius << ", " << k;
+      EXPECT_NEAR(bucket_coordinate(b, at(0.5 + kBucketBlend / 2 + 0.02)), k, 1e-5) << max_radius << ", " << k;
+    }
+    EXPECT_NEAR(bucket_coordinate(b, static_cast<float>(max_radius) * 2), b.count(), 1e-5);
+    float previous = 0.0f;
+    for (float r = 0.0f; r <= max_radius; r += 0.001f) {
+      const float s = bucket_coordinate(b, r);
+      EXPECT_GE(s, previous) << "r " << r;
+      EXPECT_LE(s - previous, 0.05f) << "r " << r;  // continuous: small steps for small dr
+      previous = s;
+    }
+  }
+  EXPECT_THROW(circular_buckets(0.5), std::invalid_argument);
+  EXPECT_THROW(circular_buckets(std::nan("")), std::invalid_argument);
+}
+
+// The CPU reference as the header defines it, written plainly: every bucket convolved over the
+// whole frame (no windows), summed in ascending order, then the composite. circular_blur_adaptive
+// convolves each bucket over its pixels' box only and must give the same bits.
+Image plain_adaptive(const Image& color, const Image& radius, const Image& depth, double focus,
+                     const CircularFilterConfig& config) {
+  const CircularBuckets b = circular_buckets(config.max_radius_px);
+  const int w = color.width, h = color.height;
+  Image layer[2] = {Image(w, h, 4), Image(w, h, 4)}, sum[2] = {Image(w, h, 4), Image(w, h, 4)};
+  std::vector<float> field_max[2] = {std::vector<float>(4, 0.0f), std::vector<float>(4, 0.0f)};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float s = bucket_coordinate(b, *radius.px(x, y));
+      const int field = *depth.px(x, y) < static_cast<float>(focus) ? 1 : 0;
+      for (int f = 0; f < 2; ++f) {
+        float* l = layer[f].px(x, y);
+        l[3] = kNoBucket;
+        if (f != field || !(s > 0.0f)) continue;
+        for (int c = 0; c < 3; ++c) l[c] = color.px(x, y)[c], field_max[f][c] = std::max(field_max[f][c], l[c]);
+        l[3] = s, field_max[f][3] = 1.0f;
+      }
+    }
+  for (int f = 0; f < 2; ++f)
+    for (int k = 1; k <= b.count(); ++k) {
+      Image bucket(w, h, 4);
+      bool any = false;
+      for (int i = 0; i < w * h; ++i) {
+        const float* l = &layer[f].pixels[4 * i];
+        const float hat = std::max(0.0f, 1.0f - std::abs(l[3] - static_cast<float>(k)));
+        for (int c = 0; c < 3; ++c) bucket.pixels[4 * i + c] = l[c] * hat;
+        bucket.pixels[4 * i + 3] = hat;
+        any = any || hat > 0.0f;
+      }
+      if (!any) continue;
+      const int n = f == 0 ? config.far_components : config.near_components;
+      const Image blurred = circular_convolve(bucket, make_circular_kernel_for_disc(n, b.disc_radius_px[k - 1]),
+                                              config.precision, 2, &field_max[f]);
+      for (std::size_t i = 0; i < blurred.pixels.size(); ++i) sum[f].pixels[i] += blurred.pixels[i];
+    }
+  Image out(w, h, 3);
+  for (int i = 0; i < w * h; ++i) {
+    float F[4], N[4];
+    for (int f = 0; f < 2; ++f) {
+      const float* l = &layer[f].pixels[4 * i];
+      const float hat = std::max(0.0f, 1.0f - std::abs(l[3]));
+      float* S = f == 0 ? F : N;
+      for (int c = 0; c < 3; ++c) S[c] = sum[f].pixels[4 * i + c] + l[c] * hat;
+      S[3] = sum[f].pixels[4 * i + 3] + hat;
+    }
+    const bool far = layer[0].pixels[4 * i + 3] > 0.0f, near = layer[1].pixels[4 * i + 3] > 0.0f;
+    const float alpha = std::min(N[3], 1.0f);
+    for (int c = 0; c < 3; ++c) {
+      float o = color.pixels[3 * i + c];
+      if (near)
+        o = F[c] / std::max(std::max(F[3], 1.0f - alpha), 1e-4f);
+      else if (far && F[3] > 1e-4f)
+        o = F[c] / F[3];
+      out.pixels[3 * i + c] = N[3] < 1.0f ? (1.0f - alpha) * o + N[c] : N[c] / N[3];
+    }
+  }
+  return out;
+}
+
+// Random radii over every bucket, both fields, and in-focus pixels; windows that reach the borders
+// and windows that do not (a second, sparse image).
+TEST(CircularAdaptive, WindowedBucketsGiveThePlainSumsBits) {
+  for (IntermediatePrecision p :
+       {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10})
+    for (bool sparse : {false, true}) {
+      const int w = 61, h = 47;
+      const Image color = random_image(w, h, 3, 0.0f, 3.0f, 5);
+      Image radius = random_image(w, h, 1, 0.0f, 14.0f, 6), depth = random_image(w, h, 1, 1.0f, 6.0f, 7);
+      if (sparse)
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x)
+            if (std::hypot(x - 30, y - 20) > 6) *radius.px(x, y) = 0.0f;
+      const CircularFilterConfig config{1, 2, 12, p, true};
+      const Image got = circular_blur_adaptive(color, radius, depth, kFocus_m, config, 3);
+      const Image expected = plain_adaptive(color, radius, depth, kFocus_m, config);
+      std::size_t differing = 0;
+      for (std::size_t i = 0; i < got.pixels.size(); ++i)
+        differing += std::memcmp(&got.pixels[i], &expected.pixels[i], sizeof(float)) != 0;
+      EXPECT_EQ(differing, 0u) << to_string(p) << (sparse ? ", sparse" : "");
+    }
+}
+
+// Point lights of several radii in one image, each spread into a disc of its own radius (+-1 px,
+// the bound; printed): near lights over an in-focus black backdrop, far lights over a black
+// far backdrop of 2 px. The radii include kernel radii, the middle of an interval (two kernels
+// mixed half and half) and a point in the mixing band where the outer kernel's weight is about 0.7
+// (its visible edge still the inner one's: the worst case, about 0.6 steps from the inner radius).
+std::vector<float> test_radii(const CircularBuckets& b) {
+  std::vector<float> radii;
+  for (int k : {2, 5, 9, 13, b.count()}) {
+    if (k > b.count()) continue;
+    const float rho = b.disc_radius_px[k - 1], previous = k > 1 ? b.disc_radius_px[k - 2] : kIdentityRadiusPx;
+    const auto at = [&](double t) { return static_cast<float>(previous + t * (rho - previous)); };
+    for (double t : {0.5, 0.5 + 0.3 * kBucketBlend, 1.0}) radii.push_back(at(t));
+  }
+  return radii;
+}
+
+TEST(CircularAdaptive, PointLightsMakeDiscsOfTheirOwnRadii) {
+  const int max_radius = 40;
+  const std::vector<float> radii = test_radii(circular_buckets(max_radius));
+  for (int n : {1, 2, 3, 6})
+    for (bool near : {true, false}) {
+      const int cell = 2 * 56, w = cell * static_cast<int>(radii.size()),
+                h = cell;  // > 2 kernel radii (1 component: 51)
+      Image color(w, h, 3), radius(w, h, 1, near ? 0.0f : 2.0f), depth(w, h, 1, near ? 3.0f : 10.0f);
+      for (std::size_t i = 0; i < radii.size(); ++i) {
+        const int cx = static_cast<int>(i) * cell + cell / 2, cy = h / 2;
+        for (int c = 0; c < 3; ++c) color.px(cx, cy)[c] = 100.0f;
+        *radius.px(cx, cy) = radii[i];
+        *depth.px(cx, cy) = near ? 1.0f : 10.0f;
+      }
+      const Image out =
+          circular_blur_adaptive(color, radius, depth, kFocus_m, {n, n, max_radius, IntermediatePrecision::f32, true});
+      for (std::size_t i = 0; i < radii.size(); ++i) {
+        const int cx = static_cast<int>(i) * cell + cell / 2, cy = h / 2;
+        const double measured = half_plateau_radius(out, 0, cx, cy, radii[i]);
+        EXPECT_NEAR(measured, radii[i], 1.0) << n << " components, " << (near ? "near" : "far") << ", r " << radii[i];
+        double energy = 0.0;
+        for (int y = 0; y < h; ++y)
+          for (int x = static_cast<int>(i) * cell; x < static_cast<int>(i + 1) * cell; ++x) energy += out.px(x, y)[0];
+        // Near: the light over black is N.rgb (the composite is linear below N.a = 1), its kernels
+        // summing to one. Far: F / F.a, normalised by the far coverage as the depth-ordered
+        // reference fills what nearer pixels hide, and the light's own pixel is a hole in the
+        // backdrop's coverage: that moves a small disc (13% at 1.3 px), <= 0.6% from 4 px on.
+        if (near || radii[i] >= 4.0f) {
+          EXPECT_NEAR(energy / 100.0, 1.0, near ? 1e-4 : 1e-2)
+              << n << " components, " << (near ? "near" : "far") << ", r " << radii[i];
+        }
+        std::printf("[adaptive disc] %d components %s: r %.2f px, measured %.3f px, energy %.5f\n", n,
+                    near ? "near" : "far", radii[i], measured, energy / 100.0);
+      }
+    }
+}
+
+TEST(CircularAdaptive, RadiusZeroIsTheIdentity) {
+  const LayeredScene s = layered_scene(40, 30, 0.0f, 1.0f);
+  for (float r : {0.0f, 0.25f, kIdentityRadiusPx})
+    for (IntermediatePrecision p :
+         {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
+      const Image radius(40, 30, 1, r);
+      const Image out = circular_blur_adaptive(s.color, radius, s.depth_m, kFocus_m, {1, 2, 8, p, true});
+      EXPECT_EQ(out.pixels, s.color.pixels) << "r " << r << " " << to_string(p);
+    }
+}
+
+// At one radius (on a bucket radius, between two, below the smallest) behind the focus, with a
+// black border wider than the kernels: the total light is kept (f32: rounding only).
+TEST(CircularAdaptive, ConstantRadiusKeepsTheEnergy) {
+  const int w = 90, h = 80, margin = 22;
+  Image color = random_image(w, h, 3, 0.0f, 4.0f, 9);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
+        for (int c = 0; c < 3; ++c) color.px(x, y)[c] = 0.0f;
+  const Image depth(w, h, 1, 10.0f);
+  for (float r : {0.8f, 4.0f, 6.3f, 16.0f}) {
+    const Image radius(w, h, 1, r);
+    const Image out =
+        circular_blur_adaptive(color, radius, depth, kFocus_m, {2, 2, 16, IntermediatePrecision::f32, true});
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(channel_sum(out, c) / channel_sum(color, c), 1.0, 1e-5) << "r " << r;
+  }
+}
+
+// adaptive_tiles: a bucket's tiles are its pixels' tiles spread by its reach, and no fewer; a frame
+// without blurred pixels visits none.
+TEST(CircularAdaptive, TilesCoverEachBucketsReach) {
+  const int w = 200, h = 150;
+  const CircularBuckets b = circular_buckets(40);
+  Image far_layer(w, h, 4, 0.0f), near_layer(w, h, 4, 0.0f);
+  for (float& v : far_layer.pixels) v = kNoBucket;
+  for (float& v : near_layer.pixels) v = kNoBucket;
+  std::vector<int> radii[2];
+  for (int f = 0; f < 2; ++f)
+    for (float rho : b.disc_radius_px) radii[f].push_back(make_circular_kernel_for_disc(2, rho).radius_px);
+  const int components[2] = {2, 2};
+  const AdaptiveWork none = adaptive_tiles(far_layer, near_layer, b, radii, components);
+  EXPECT_EQ(none.tiles, 7 * 5);
+  EXPECT_EQ(none.bucket_mask[0] | none.bucket_mask[1], 0u);
+  EXPECT_EQ(none.taps[0] + none.taps[1], 0.0);
+  // One far pixel at the corner of tile (3, 2) in bucket K (radius 40: kernel radius 44, reach 2).
+  far_layer.px(3 * kTilePx, 2 * kTilePx)[3] = static_cast<float>(b.count());
+  const AdaptiveWork one = adaptive_tiles(far_layer, near_layer, b, radii, components);
+  const int K = b.count();
+  EXPECT_EQ(one.bucket_mask[0], 1u << K);
+  EXPECT_EQ(one.horizontal_tiles[0][K - 1], 5);    // tiles 1..5 of row 2
+  EXPECT_EQ(one.vertical_tiles[0][K - 1], 5 * 5);  // rows 0..4
+  EXPECT_EQ(one.zero_tiles[0][K - 1], 5 * 5 - 5);  // rows 0..4 (2 +- 4, clamped), less row 2
+  for (int k = 1; k < K; ++k) EXPECT_EQ(one.vertical_tiles[0][k - 1], 0) << k;
+}
+
+// What the declaration says of adaptive on: its tile lists' dispatch limit, and its models.
+TEST(CircularAdaptive, DeclarationCoversTheMode) {
+  const Method& m = find_method("circular2");
+  FilterOptions on = m.defaults({41, 2}), off = on;
+  on.values["adaptive"] = 1;
+  EXPECT_EQ(m.option("adaptive")->choices, (std::vector<std::string>{"off", "on"}));
+  EXPECT_EQ(m.options_json(on)["adaptive"], "on");
+  EXPECT_EQ(m.unsupported(on, 1920, 1080), "");
+  EXPECT_EQ(m.unsupported(off, 16384, 16384), "");
+  EXPECT_NE(m.unsupported(on, 16384, 16384), "");
+  // Passes: the fixed kernel's four against the buckets' three; the bound covers every bucket.
+  std::vector<std::string> passes;
+  for (const PassWork& p : m.work(on, 800, 600)) passes.push_back(p.pass);
+  EXPECT_EQ(passes, (std::vector<std::string>{"layers", "tiles", "far", "near"}));
+  EXPECT_GT(m.gpu_memory(on, 800, 600, nullptr).bytes, m.gpu_memory(off, 800, 600, nullptr).bytes);
+  EXPECT_GE(m.gpu_tolerance(on), m.gpu_tolerance(off));
+  EXPECT_EQ(m.storage_tolerance(on), 0.0);  // f32
 }
 
 TEST(CircularCost, CountsTapsAndIntermediateBytes) {

@@ -27,6 +27,7 @@
 #include <cstring>
 #include <ostream>
 #include <string>
+#include <tuple>
 
 #include "circular_gpu.hpp"
 #include "circular_separable.hpp"
@@ -364,6 +365,234 @@ TEST(GpuCircularDisc, PointLightAtConstantCocMakesDiscOfRequestedRadius) {
       EXPECT_NEAR(measured, disc, 0.005 * disc + 0.05) << n << " components, disc " << disc << " px";
       std::printf("[disc] %d components: requested %.1f px, measured %.3f px, energy %.6f\n", n, disc, measured, total);
     }
+}
+
+}  // namespace
+}  // namespace bokeh
+
+namespace bokeh {
+namespace {
+
+// ---- Radius-following filters (adaptive on) ----
+
+FilterOptions adaptive_options(int components, int near_components, IntermediatePrecision p, GatherPattern pattern) {
+  FilterOptions o = find_method("circular" + std::to_string(components)).defaults(pattern);
+  o.precision = to_string(p);
+  o.values["adaptive"] = 1;
+  if (near_components > 0) o.values["near_components"] = near_components;
+  return o;
+}
+
+double max_abs_value(const Image& image) {
+  double m = 0.0;
+  for (float v : image.pixels) m = std::max(m, double(std::abs(v)));
+  return m;
+}
+
+// GPU against the CPU reference within the method's declared bound (gpu_tolerance, relative to the
+// largest value), and the same buckets and tiles (the GPU's tile lists against adaptive_tiles, an
+// independent CPU version of tiles.comp; the CPU reference itself windows by bounding boxes).
+void check_adaptive_gpu_against_cpu(const Method& method, const FilterOptions& o, const char* scene_name, int w,
+                                    int h) {
+  const Scene s = make_scene(scene_name, w, h);
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, o.pattern.max_radius_px() * 1.2);
+  nlohmann::json gpu_stats, cpu_stats;
+  const Image gpu = run_gpu(context(), method, s.color, s.depth_m, lens, o, nullptr, &gpu_stats);
+  const Image cpu = run_cpu(method, s.color, s.depth_m, lens, o, 2, &cpu_stats);
+  const double error = max_abs_diff(gpu, cpu) / max_abs_value(cpu), bound = method.gpu_tolerance(o);
+  std::printf(
+      "[adaptive %s %dx%d %s near %d %-11s] GPU vs CPU %.3g of the largest value (bound %.3g); buckets far %d "
+      "near %d, taps far %.3g near %.3g\n",
+      scene_name, w, h, method.name.c_str(), o.integer("near_components"), o.precision.c_str(), error, bound,
+      gpu_stats["far_buckets_run"].get<int>(), gpu_stats["near_buckets_run"].get<int>(),
+      gpu_stats["far_taps"].get<double>(), gpu_stats["near_taps"].get<double>());
+  EXPECT_LE(error, bound) << method.name << " " << o.precision << " on " << scene_name;
+  EXPECT_EQ(gpu_stats, cpu_stats) << method.name << " " << o.precision << " on " << scene_name;
+  // The model's work is an upper bound of what the frame ran.
+  double modelled = 0.0;
+  for (const PassWork& pass : method.work(o, w, h))
+    if (pass.pass == "far" || pass.pass == "near") modelled += pass.taps;
+  EXPECT_LE(gpu_stats["far_taps"].get<double>() + gpu_stats["near_taps"].get<double>(), modelled);
+  // On lavapipe the GPU rounds like the CPU (f16 to nearest, the 10-bit codes with roundEven):
+  // the headline figure is f32 noise.
+  if (context().info().driver_name == "llvmpipe") EXPECT_LT(error, 1e-5) << method.name << " " << o.precision;
+}
+
+struct AdaptiveCase {
+  int components, near_components;
+  IntermediatePrecision precision;
+};
+void PrintTo(const AdaptiveCase& c, std::ostream* os) {
+  *os << c.components << " far / " << c.near_components << " near components, " << to_string(c.precision);
+}
+
+class GpuCircularAdaptive : public ::testing::TestWithParam<AdaptiveCase> {};
+
+// Every component count and precision on a small frame (max radius 6 px: 6 buckets), both fields.
+TEST_P(GpuCircularAdaptive, MatchesCpuReferenceWithinDeclaredBound) {
+  const AdaptiveCase c = GetParam();
+  const FilterOptions o = adaptive_options(c.components, c.near_components, c.precision, {7, 2});
+  check_adaptive_gpu_against_cpu(find_method("circular" + std::to_string(c.components)), o, "hoops", 63, 46);
+}
+
+std::vector<AdaptiveCase> adaptive_cases() {
+  std::vector<AdaptiveCase> cases;
+  for (IntermediatePrecision p :
+       {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10})
+    for (int n = 1; n <= kMaxCircularComponents; ++n) cases.push_back({n, 0, p});
+  cases.push_back({2, 1, IntermediatePrecision::f32});  // Garcia's production choice: 2 far, 1 near
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(ComponentsAndPrecisions, GpuCircularAdaptive, ::testing::ValuesIn(adaptive_cases()),
+                         [](const auto& info) {
+                           return "circular" + std::to_string(info.param.components) + "_near" +
+                                  std::to_string(info.param.near_components) + "_" + to_string(info.param.precision);
+                         });
+
+// Larger frames with many tiles and buckets whose reach spans tiles (max radius 20 px: kernel radii
+// up to 22, 1 tile; 1 component 26), a receding ground plane (every radius) and the hoops.
+TEST(GpuCircularAdaptiveTiles, ManyTilesMatchCpu) {
+  for (const char* scene : {"pillars", "hoops"})
+    for (int n : {1, 2})
+      for (IntermediatePrecision p : {IntermediatePrecision::f32, IntermediatePrecision::bracketed10})
+        check_adaptive_gpu_against_cpu(find_method("circular" + std::to_string(n)), adaptive_options(n, 0, p, {21, 2}),
+                                       scene, 230, 170);
+}
+
+// One blurred pixel with the largest radius at a tile's corner or edge: its disc reaches into
+// tiles next to its own (and two tiles away along the rows), which the tile lists must visit
+// (the CPU reference windows by bounding boxes, not tiles). Near pixels over an in-focus frame
+// (only their bucket runs, in their field only), and a far pixel over a far backdrop of about 8 px.
+TEST(GpuCircularAdaptiveTiles, SingleBlurredPixelReachesNeighbouringTiles) {
+  const int w = 5 * kTilePx + 7, h = 4 * kTilePx + 3;
+  const Method& method = find_method("circular2");
+  const FilterOptions o = adaptive_options(2, 1, IntermediatePrecision::f32, {81, 1});  // max radius 40 px
+  for (const auto& [px, py, near] :
+       {std::tuple{kTilePx - 1, kTilePx - 1, true}, std::tuple{2 * kTilePx, 3 * kTilePx - 1, true},
+        std::tuple{w - 1, 0, true}, std::tuple{kTilePx, kTilePx, false}}) {
+    Image color = random_image(w, h, 3, 0.0f, 1.0f, 3), depth_m(w, h, 1, near ? 3.0f : 3.5f);
+    for (int c = 0; c < 3; ++c) color.px(px, py)[c] = 50.0f;
+    *depth_m.px(px, py) = near ? 1.0f : 10.0f;
+    const Lens lens = with_max_coc_radius(Lens{}, depth_m, 40.0);
+    nlohmann::json stats;
+    const Image gpu = run_gpu(context(), method, color, depth_m, lens, o, nullptr, &stats);
+    const Image cpu = run_cpu(method, color, depth_m, lens, o, 2);
+    EXPECT_LE(max_abs_diff(gpu, cpu) / max_abs_value(cpu), method.gpu_tolerance(o)) << px << ", " << py;
+    // The light reaches 40 px away (a tenth of its disc's height there, against the backdrop's 1).
+    const int far_x = px >= w / 2 ? px - 30 : px + 30;
+    EXPECT_GT(std::abs(gpu.px(far_x, py)[0] - color.px(far_x, py)[0]), 1e-3) << px << ", " << py;
+    const std::string field = near ? "near_" : "far_";
+    if (near) {
+      EXPECT_EQ(stats["near_buckets_run"], 1) << px << ", " << py;
+      EXPECT_EQ(stats["far_buckets_run"], 0) << px << ", " << py;
+    }
+    std::printf("[single pixel] (%d, %d) %s: buckets %s, horizontal tiles %s, vertical %s of %d\n", px, py,
+                near ? "near" : "far", stats[field + "bucket_radii_px"].dump().c_str(),
+                stats[field + "horizontal_tiles"].dump().c_str(), stats[field + "vertical_tiles"].dump().c_str(),
+                stats["tiles"].get<int>());
+  }
+}
+
+// The test on the GPU: point lights of several radii in one image (near lights over an
+// in-focus black backdrop, depths chosen for the radii) become discs of their own radii (+-1 px)
+// with their energy (near: the composite is linear while N.a < 1).
+TEST(GpuCircularAdaptiveDisc, PointLightsMakeDiscsOfTheirOwnRadii) {
+  const int max_radius = 12;
+  const CircularBuckets b = circular_buckets(max_radius);
+  std::vector<float> radii;
+  for (int k : {3, 5, b.count()}) {
+    const float rho = b.disc_radius_px[k - 1], previous = b.disc_radius_px[k - 2];
+    for (double t : {0.5, 0.5 + 0.3 * kBucketBlend, 1.0})
+      radii.push_back(static_cast<float>(previous + t * (rho - previous)));
+  }
+  const int cell = 2 * 20, w = cell * static_cast<int>(radii.size()), h = cell;  // > 2 kernel radii (16)
+  Lens lens;
+  const double scale = coc_scale_px(lens, w), focus = lens.focus_distance_m;
+  Image color(w, h, 3), depth(w, h, 1, static_cast<float>(focus));
+  for (std::size_t i = 0; i < radii.size(); ++i) {
+    const int cx = static_cast<int>(i) * cell + cell / 2;
+    for (int c = 0; c < 3; ++c) color.px(cx, h / 2)[c] = 100.0f;
+    *depth.px(cx, h / 2) = static_cast<float>(focus / (1.0 + radii[i] / scale));  // r = scale (P - D) / D
+  }
+  for (int n : {1, 2, 6}) {
+    const Method& method = find_method("circular" + std::to_string(n));
+    const FilterOptions o = adaptive_options(n, 0, IntermediatePrecision::f32, {2 * max_radius + 1, 1});
+    const Image out = run_gpu(context(), method, color, depth, lens, o);
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+      const int cx = static_cast<int>(i) * cell + cell / 2;
+      const double measured = half_plateau_radius(out, 0, cx, h / 2, radii[i]);
+      double energy = 0.0;
+      for (int y = 0; y < h; ++y)
+        for (int x = static_cast<int>(i) * cell; x < static_cast<int>(i + 1) * cell; ++x) energy += out.px(x, y)[0];
+      EXPECT_NEAR(measured, radii[i], 1.0) << n << " components, r " << radii[i];
+      EXPECT_NEAR(energy / 100.0, 1.0, 1e-4) << n << " components, r " << radii[i];
+      std::printf("[adaptive disc GPU] %d components: r %.2f px, measured %.3f px, energy %.5f\n", n, radii[i],
+                  measured, energy / 100.0);
+    }
+  }
+}
+
+// The conformance suite's identity and energy checks for adaptive on (it runs the defaults only),
+// on both backends, within the declared storage_tolerance.
+TEST(GpuCircularAdaptive, RadiusZeroIsIdentityAndEnergyIsKept) {
+  for (int n : {1, 2})
+    for (IntermediatePrecision p :
+         {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
+      const Method& method = find_method("circular" + std::to_string(n));
+      const FilterOptions o = adaptive_options(n, 0, p, {9, 2});
+      Scene s = make_scene("pillars", 64, 48);
+      s.lens.f_stop = 1e12;  // a pinhole: every radius 0
+      const double max_color = max_abs_value(s.color);
+      // Energy: every pixel behind the focus at one radius, light only inside a margin wider than it.
+      const int w = 80, h = 64, margin = 2 * 8 + 2;
+      Image color = random_image(w, h, 3, 0.0f, 4.0f, 7);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          if (x < margin || y < margin || x >= w - margin || y >= h - margin)
+            for (int c = 0; c < 3; ++c) color.px(x, y)[c] = 0.0f;
+      const Image depth(w, h, 1, 10.0f);
+      auto total = [](const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); };
+      const double in = total(color);
+      for (const bool gpu : {false, true}) {
+        const Image identity = gpu ? run_gpu(context(), method, s.color, s.depth_m, s.lens, o)
+                                   : run_cpu(method, s.color, s.depth_m, s.lens, o, 2);
+        EXPECT_LE(max_abs_diff(identity, s.color), method.storage_tolerance(o) * max_color + 1e-6 * max_color)
+            << method.name << " " << o.precision << (gpu ? " GPU" : " CPU");
+        for (double radius : {8.0, 4.8}) {  // on the max radius's kernel; two kernels mixed
+          const Lens lens = with_max_coc_radius(Lens{}, depth, radius);
+          const Image out =
+              gpu ? run_gpu(context(), method, color, depth, lens, o) : run_cpu(method, color, depth, lens, o, 2);
+          const double bound = method.storage_tolerance(o) * max_abs_value(color) * color.pixels.size() / in + 1e-5;
+          EXPECT_NEAR(total(out) / in, 1.0, bound)
+              << method.name << " " << o.precision << (gpu ? " GPU" : " CPU") << ", radius " << radius;
+        }
+      }
+    }
+}
+
+// Memory and passes: what the GPU driver allocates against the method's model, and the passes it
+// stamps against the work model's names.
+TEST(GpuCircularAdaptive, MemoryAndPassesMatchTheModels) {
+  const Scene s = make_scene("hoops", 150, 100);
+  for (IntermediatePrecision p :
+       {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10}) {
+    const Method& method = find_method("circular3");
+    const FilterOptions o = adaptive_options(3, 1, p, {21, 2});
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, s.lens, o.pattern);
+    const auto filter = method.make_gpu(frame, o);
+    const MemoryUse model = method.gpu_memory(o, 150, 100, &context());
+    // The model leaves out the channel maxima (40 B) and the dispatch sizes (2 KiB); the driver may
+    // round each allocation up a little.
+    EXPECT_GE(filter->intermediate_bytes(), model.bytes) << to_string(p);
+    EXPECT_LE(filter->intermediate_bytes(), model.bytes + 16384) << to_string(p);
+    vk::TimestampQueries timer(context(), 16);
+    gpu::warm_up(frame, *filter, timer);
+    std::vector<std::string> timed, modelled = {"coc"};
+    for (const vk::PassTime& pass : gpu::run_frames(frame, *filter, timer)) timed.push_back(pass.pass);
+    for (const PassWork& pass : method.work(o, 150, 100)) modelled.push_back(pass.pass);
+    EXPECT_EQ(timed, modelled) << to_string(p);
+  }
 }
 
 }  // namespace
