@@ -15,6 +15,7 @@
 #include <string>
 
 #include "coc.hpp"
+#include "gpu_test_support.hpp"
 #include "method.hpp"
 #include "run.hpp"
 #include "scene.hpp"
@@ -24,11 +25,6 @@ namespace bokeh {
 namespace {
 
 using namespace bokeh::test;
-
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
 
 struct Config {
   const Method* method;

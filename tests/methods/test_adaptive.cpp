@@ -17,6 +17,7 @@
 #include "coc_tiles_gpu.hpp"
 #include "flag.hpp"
 #include "flag_gpu.hpp"
+#include "gpu_test_support.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
 #include "run.hpp"
@@ -30,11 +31,6 @@ namespace bokeh {
 namespace {
 
 using namespace bokeh::test;
-
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
 
 bool same_bits(const Image& a, const Image& b) {
   return a.same_shape(b) && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;

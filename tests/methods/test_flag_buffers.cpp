@@ -18,6 +18,7 @@
 #include "flag_memory.hpp"
 #include "flag_reduced.hpp"
 #include "flag_gpu.hpp"
+#include "gpu_test_support.hpp"
 #include "half_float.hpp"
 #include "metrics.hpp"
 #include "run.hpp"
@@ -27,10 +28,7 @@
 namespace bokeh {
 namespace {
 
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
+using test::context;
 
 // FLAG's defaults (every option of its own present) at this pattern and precision.
 FilterOptions flag_options(const GatherPattern& pattern, const std::string& precision) {

@@ -32,6 +32,7 @@
 #include "circular_gpu.hpp"
 #include "circular_separable.hpp"
 #include "coc.hpp"
+#include "gpu_test_support.hpp"
 #include "run.hpp"
 #include "scene.hpp"
 #include "test_support.hpp"
@@ -40,11 +41,6 @@ namespace bokeh {
 namespace {
 
 using namespace bokeh::test;
-
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
 
 constexpr double kU = 1.0 / (1 << 24);        // f32 unit roundoff
 constexpr float kMinFarAlpha = 1e-4f;         // as kernels/circular/circular_separable.cpp
@@ -415,7 +411,9 @@ void check_adaptive_gpu_against_cpu(const Method& method, const FilterOptions& o
   EXPECT_LE(gpu_stats["far_taps"].get<double>() + gpu_stats["near_taps"].get<double>(), modelled);
   // On lavapipe the GPU rounds like the CPU (f16 to nearest, the 10-bit codes with roundEven):
   // the headline figure is f32 noise.
-  if (context().info().driver_name == "llvmpipe") EXPECT_LT(error, 1e-5) << method.name << " " << o.precision;
+  if (context().info().driver_name == "llvmpipe") {
+    EXPECT_LT(error, 1e-5) << method.name << " " << o.precision;
+  }
 }
 
 struct AdaptiveCase {

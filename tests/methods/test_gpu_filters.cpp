@@ -7,6 +7,7 @@
 #include "coc.hpp"
 #include "flag.hpp"
 #include "flag_gpu.hpp"
+#include "gpu_test_support.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
 #include "run.hpp"
@@ -25,10 +26,7 @@ double max_rel_error(const Image& a, const Image& ref) {
   return max_diff / max_ref;
 }
 
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
+using test::context;
 
 // A method's defaults (every option of its own present) at this pattern and precision.
 FilterOptions options_for(const char* method, const GatherPattern& pattern, const std::string& precision) {

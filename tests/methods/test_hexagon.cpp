@@ -10,6 +10,7 @@
 #include <cstdio>
 
 #include "coc.hpp"
+#include "gpu_test_support.hpp"
 #include "hexagon.hpp"
 #include "method.hpp"
 #include "run.hpp"
@@ -20,11 +21,6 @@ namespace bokeh {
 namespace {
 
 using namespace bokeh::test;
-
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
 
 constexpr float kFocusM = 3.0f;  // Lens{}'s focus distance
 

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "coc.hpp"
+#include "gpu_test_support.hpp"
 #include "method.hpp"
 #include "run.hpp"
 #include "signed_coc.hpp"
@@ -19,11 +20,6 @@ namespace bokeh {
 namespace {
 
 using namespace bokeh::test;
-
-vk::Context& context() {
-  static vk::Context ctx;
-  return ctx;
-}
 
 constexpr float kFocusM = 3.0f;  // Lens{}'s focus distance
 
