@@ -1,12 +1,14 @@
 # Run at every build (cmake -P): writes build_info.hpp with the commit the binary is built from,
-# marked -dirty when tracked files differ from it. Rewritten only when that changes, so builds stay
-# incremental.
+# marked -dirty when tracked files other than the measured outputs (results/, plots' images) differ
+# from it, so regenerating the committed results does not mark the binary that measures them.
+# Rewritten only when that changes, so builds stay incremental.
 execute_process(COMMAND git -C ${SOURCE_DIR} rev-parse --short=12 HEAD
                 OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET RESULT_VARIABLE no_git)
 if(no_git OR NOT commit)
   set(commit "unknown")
 else()
-  execute_process(COMMAND git -C ${SOURCE_DIR} status --porcelain --untracked-files=no
+  execute_process(COMMAND git -C ${SOURCE_DIR} status --porcelain --untracked-files=no --
+                          . ":(exclude)results" ":(exclude)plots/*.png" ":(exclude)plots/*.svg"
                   OUTPUT_VARIABLE changes OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
   if(changes)
     set(commit "${commit}-dirty")
