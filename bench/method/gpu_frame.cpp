@@ -25,7 +25,9 @@ GpuFrame::GpuFrame(vk::Context& context, const Image& color_image, const Image& 
       params{color_image.width, color_image.height, pattern.half(), pattern.spacing_px,
              static_cast<float>(coc_scale_px(lens, color_image.width)), static_cast<float>(lens.focus_distance_m),
              pattern.max_radius_px()},
-      color(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "colour buffer")),
+      // Texel usage: methods may read the colour through a TexelView (lavapipe's fast load path).
+      color(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "colour buffer",
+                                    VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT)),
       depth(vk::make_storage_buffer(ctx, depth_m.pixel_count() * 4, "depth buffer")),
       packed(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "packed CoC buffer")),
       output(vk::make_storage_buffer(ctx, color_image.pixel_count() * 16, "output buffer")),
