@@ -1,7 +1,9 @@
-// `bokehbench devices`: what the Vulkan loader sees, in `--device` order, and the default choice.
+// `bokehbench devices` and `bokehbench methods`: what there is to choose from (--device, --method).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "commands.hpp"
+#include "method.hpp"
 #include "vk/context.hpp"
 
 namespace bokeh {
@@ -15,6 +17,23 @@ void add_devices_command(CLI::App& app) {
     for (const auto& d : devices)
       fmt::print("{:>5}  {:<40} {:<11} {:<12} {}{}\n", d.index, d.name, d.type, d.driver_name, d.driver_info,
                  d.index == chosen.info().index ? "  (default)" : "");
+  });
+}
+
+void add_methods_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("methods", "List the registered methods: precisions, buffer scales and their own options");
+  cmd->callback([] {
+    for (const Method& m : registered_methods()) {
+      fmt::print("{}{}: {}\n", m.name, m.in_default_sweeps ? "" : " (not in default sweeps: name it)", m.description);
+      fmt::print("    precisions {} (default first), buffer scales {}\n", fmt::join(m.precisions, ", "),
+                 fmt::join(m.buffer_scales, ", "));
+      for (const OptionSpec& spec : m.options) {
+        const std::string values = spec.choices.empty()
+                                       ? fmt::format("{} .. {}", spec.min, spec.max)
+                                       : fmt::format("{}", fmt::join(spec.choices, " | "));
+        fmt::print("    {} {} (default {})\n", spec.flag(), values, spec.to_json(spec.default_value).dump());
+      }
+    }
   });
 }
 

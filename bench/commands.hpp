@@ -52,6 +52,7 @@ struct ExitStatus {
 inline bool given(const CLI::Option* option) { return option->count() > 0; }
 
 void add_devices_command(CLI::App& app);
+void add_methods_command(CLI::App& app);
 void add_render_command(CLI::App& app);
 void add_memory_command(CLI::App& app);
 void add_buffers_command(CLI::App& app);

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   bokeh::add_render_command(app);
   bokeh::add_stability_command(app);
   bokeh::add_devices_command(app);
+  bokeh::add_methods_command(app);
   bokeh::add_compare_command(app);
   bokeh::add_selftest_compare_command(app);
   try {

@@ -34,8 +34,11 @@ def method_names(doc):
 def method_colours(doc):
     """One colour per method, in registry order."""
     names = method_names(doc)
-    cmap = plt.get_cmap("tab10" if len(names) <= 10 else "tab20")
-    return {name: cmap(i % cmap.N) for i, name in enumerate(names)}
+    # tab10 without its grey, which the plots keep for legend entries that are not a method.
+    palette = [c for i, c in enumerate(plt.get_cmap("tab10").colors) if i != 7]
+    if len(names) > len(palette):
+        palette = list(plt.get_cmap("tab20").colors)
+    return {name: palette[i % len(palette)] for i, name in enumerate(names)}
 
 
 def markers_for(values):
