@@ -29,6 +29,8 @@
 #include <span>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "coc_tiles_gpu.hpp"
 #include "flag_gpu.hpp"
 #include "flag_reduced.hpp"
@@ -59,11 +61,40 @@ const std::vector<std::string>& flag_horizontal_blocks() {
   return blocks;
 }
 
-int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device) {
+// lavapipe (Mesa 22.3.6) computes wrong FLAG layers, all zero or NaN and without an error, once a
+// pass's private arrays grow past what it handles. Measured with single lights at k = 1 (`bokehbench
+// stability` found it): the horizontal pass fails at block x layers = 404 (N = 201, block 4) and works
+// at 324 (N = 161, block 4) and 202 (N = 201, block 2); the bracket pass of the bracketed precisions
+// (four arrays of ceil(N/2) entries) fails at 41 layers (N = 81) and works at 31. On lavapipe, auto
+// takes the largest block within the bound and a configuration beyond either bound is refused.
+constexpr int kSoftwareMaxBlockLayers = 324, kSoftwareMaxBracketedLayers = 31;
+
+int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device, int layers) {
   const auto& name = flag_horizontal_blocks().at(static_cast<std::size_t>(options.integer("horizontal_block")));
-  if (name == "auto") return device.is_software() ? 4 : 1;
-  return std::stoi(name);
+  if (name != "auto") return std::stoi(name);
+  if (!device.is_software()) return 1;
+  for (int block : {4, 2})
+    if (block * layers <= kSoftwareMaxBlockLayers) return block;
+  return 1;
 }
+
+namespace {
+
+void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, bool bracketed) {
+  if (!device.is_software()) return;
+  if (block * layers > kSoftwareMaxBlockLayers)
+    throw std::invalid_argument(fmt::format(
+        "FLAG on {}: horizontal block {} x {} layers = {} bins per invocation, over the {} this driver computes "
+        "correctly (beyond, it returns zero layers without an error); use --horizontal-block auto or a smaller N",
+        device.name, block, layers, block * layers, kSoftwareMaxBlockLayers));
+  if (bracketed && layers > kSoftwareMaxBracketedLayers)
+    throw std::invalid_argument(fmt::format(
+        "FLAG bracketed precisions on {}: {} layers, over the {} this driver computes correctly (beyond, the "
+        "bracket pass returns NaN without an error); use f16, f32 or r11g11b10f, a buffer scale, or N <= {}",
+        device.name, layers, kSoftwareMaxBracketedLayers, 2 * kSoftwareMaxBracketedLayers - 1));
+}
+
+}  // namespace
 
 namespace {
 
@@ -92,7 +123,7 @@ class Flag final : public gpu::GpuFilter {
         pattern_(reduced_pattern(options.pattern, options.buffer_scale)),
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
-        outputs_(flag_horizontal_block(options, frame.ctx.info())),
+        outputs_(flag_horizontal_block(options, frame.ctx.info(), pattern_.layers())),
         tile_px_(adaptive_on(options) ? adaptive_tile_px(options) : 0),
         layer_count_(pattern_.layers()) {
     check_colour(frame, precision);
@@ -143,6 +174,7 @@ class Flag final : public gpu::GpuFilter {
                            sizeof(PassParams), std::vector<std::int32_t>{pattern_.spacing_px, tile_px_});
       tile_layers_->bind(0, tiles_->buffer());
     }
+    check_software_bounds(frame.ctx.info(), outputs_, layer_count_, bracketed);
     const std::string variant = std::string(tile_px_ > 0 ? "_adaptive_" : "_") + to_string(precision);
     std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px, outputs_};
     std::vector<std::int32_t> vertical_constants = {layer_count_};

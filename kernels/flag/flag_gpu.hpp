@@ -14,10 +14,11 @@ namespace bokeh {
 // Pixels per invocation of the horizontal pass, at stride k (OUTPUTS in shaders/flag/layers.glsl),
 // the method's option "horizontal_block": each loaded row sample serves up to that many pixels, whose
 // layers stay bit for bit the same. "auto" picks 4 on CPU devices (lavapipe: a buffer load costs a
-// scalar load per lane) and 1 on GPUs, where 4 pixels' bins (4 x ceil(N/2) x 3 floats) would spill
-// registers and the L1 cache already shares the loads.
+// scalar load per lane; 2 or 1 where 4 x layers would pass what lavapipe computes correctly, see
+// flag_gpu.cpp) and 1 on GPUs, where 4 pixels' bins (4 x ceil(N/2) x 3 floats) would spill registers
+// and the L1 cache already shares the loads.
 const std::vector<std::string>& flag_horizontal_blocks();  // "auto", "1", "2", "4", "8"
-int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device);
+int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device, int layers);
 
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
 

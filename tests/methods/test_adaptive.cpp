@@ -336,7 +336,9 @@ TEST(AdaptiveGather, FlagReducedBuffersStayWithinTheBound) {
       for (float v : worst.pixels) largest = std::max(largest, double(std::abs(v)));
       const double bound = flag.storage_tolerance(on) * largest;
       EXPECT_LE(max_abs_diff(adaptive, worst), bound * (1 + 1e-6)) << precision << " 1/" << scale;
-      if (precision == "f32") EXPECT_TRUE(same_bits(adaptive, worst)) << "1/" << scale;
+      if (precision == "f32") {
+        EXPECT_TRUE(same_bits(adaptive, worst)) << "1/" << scale;
+      }
       // The CPU reference of adaptive = on models the same pass-through.
       const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, on, 2);
       EXPECT_LE(max_abs_diff(adaptive, cpu), flag.gpu_tolerance(on) * largest) << precision << " 1/" << scale;
@@ -370,7 +372,9 @@ TEST(AdaptiveGather, FlagLayersAndBytesFollowTheScenesLargestRadius) {
     EXPECT_LE(filter->intermediate_bytes(), image + 4 * tile_map + 4096) << radius;  // allocation granularity
     EXPECT_GT(filter->intermediate_bytes(), previous);
     previous = filter->intermediate_bytes();
-    if (layers < worst_layers) EXPECT_LT(filter->intermediate_bytes(), worst_bytes);
+    if (layers < worst_layers) {
+      EXPECT_LT(filter->intermediate_bytes(), worst_bytes);
+    }
     // The worst case allocates ceil(N/2) layers whatever the scene.
     auto worst = find_method("flag").make_gpu(frame, options_for("flag", p, false));
     EXPECT_GE(worst->intermediate_bytes(), worst_bytes);
@@ -381,7 +385,7 @@ TEST(AdaptiveGather, AnAllInFocusSceneCostsAlmostNothingAndReturnsTheInput) {
   const Scene s = focal_plane_scene(100, 70, {});  // every depth on the focal plane: radius 0
   const GatherPattern p{41, 2};
   for (const char* method : {"naive", "flag"})
-    for (const std::string precision : find_method(method).precisions) {
+    for (const std::string& precision : find_method(method).precisions) {
       const FilterOptions o = options_for(method, p, true, 16, precision);
       gpu::GpuFrame frame(context(), s.color, s.depth_m, s.lens, p);
       auto filter = find_method(method).make_gpu(frame, o);

@@ -470,7 +470,9 @@ TEST(FlagReduced, ConstantLargeCocApproachesFullResolution) {
         report("RMSE / RMSE(input vs full res), " + tag, rmse / blur, 0.12);
         EXPECT_LT(rmse, previous) << tag << ": error should fall as the circles grow";
         EXPECT_LE(rmse / blur, 0.12) << tag;
-        if (radius == 36.0f) EXPECT_LE(rmse / rms, scale == 2 ? 0.15 : 0.18) << tag;
+        if (radius == 36.0f) {
+          EXPECT_LE(rmse / rms, scale == 2 ? 0.15 : 0.18) << tag;
+        }
         previous = rmse;
       }
     }

@@ -135,6 +135,30 @@ TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
 // An HDR highlight above half-float's largest finite value (65504). f32 layers keep it exactly;
 // RGBA16F layers cannot: the driver either saturates (lavapipe rounds toward zero, to 65504) or
 // overflows to inf. Either way the loss is visible in the numbers the harness reports.
+// lavapipe computes wrong FLAG layers past a size of the horizontal pass's bins (flag_gpu.cpp): auto
+// stays within it, and an explicit block or bracketed precision beyond it is refused, never run.
+TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
+  vk::DeviceInfo software;
+  software.type = "cpu";
+  vk::DeviceInfo gpu = software;
+  gpu.type = "discrete";
+  FilterOptions o = options_for("flag", GatherPattern{201, 1}, "f32");
+  EXPECT_EQ(flag_horizontal_block(o, software, 81), 4);
+  EXPECT_EQ(flag_horizontal_block(o, software, 101), 2);
+  EXPECT_EQ(flag_horizontal_block(o, software, 200), 1);
+  EXPECT_EQ(flag_horizontal_block(o, gpu, 101), 1);
+  if (!context().info().is_software()) GTEST_SKIP() << "the bounds are lavapipe's";
+  const Scene s = make_scene("points", 48, 40);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, s.lens, o.pattern);
+  o.values["horizontal_block"] = 3;  // "4": 4 x 101 layers
+  EXPECT_THROW(find_method("flag").make_gpu(frame, o), std::invalid_argument);
+  o.values["horizontal_block"] = 0;  // auto
+  EXPECT_NO_THROW(find_method("flag").make_gpu(frame, o));
+  FilterOptions bracketed = options_for("flag", GatherPattern{81, 1}, "unorm10_bracketed");
+  gpu::GpuFrame frame81(context(), s.color, s.depth_m, s.lens, bracketed.pattern);
+  EXPECT_THROW(find_method("flag").make_gpu(frame81, bracketed), std::invalid_argument);
+}
+
 TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
   Image color(32, 24, 3, 0.5f);
   Image depth(32, 24, 1, 3.0f);  // everything in focus: radius 0, output = input in exact arithmetic
