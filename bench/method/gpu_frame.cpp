@@ -45,6 +45,21 @@ GpuFrame::GpuFrame(vk::Context& context, const Image& color_image, const Image& 
   coc_pass.bind(3, disc_area);
 }
 
+SignedCocPass::SignedCocPass(GpuFrame& frame)
+    : buffer(vk::make_storage_buffer(frame.ctx, static_cast<VkDeviceSize>(frame.width()) * frame.height() * 16,
+                                     "signed-CoC buffer")),
+      frame_(frame),
+      pipeline_(frame.ctx, vk::spirv("common/signed_coc"), {kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(PassParams)) {
+  pipeline_.bind(0, frame.color);
+  pipeline_.bind(1, frame.depth);
+  pipeline_.bind(2, frame.packed);
+  pipeline_.bind(3, buffer);
+}
+
+void SignedCocPass::dispatch(VkCommandBuffer cmd) const {
+  pipeline_.dispatch(cmd, &frame_.params, frame_.width(), frame_.height());
+}
+
 vk::Buffer make_disc_area_buffer(vk::Context& ctx, const GatherPattern& pattern) {
   validate(pattern);
   const DiscAreaTable table(pattern);

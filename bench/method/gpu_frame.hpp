@@ -43,6 +43,21 @@ class GpuFrame {
   Image read_packed();  // RGBA as the CoC pass wrote it
 };
 
+// The engine-style gathers' input (shaders/common/signed_coc.comp, kernels/core/signed_coc.hpp):
+// colour with the CoC radius in alpha, negative in front of the focus plane, in `buffer` (vec4 per
+// pixel). Spiral and hexagon start from it.
+class SignedCocPass {
+ public:
+  explicit SignedCocPass(GpuFrame& frame);
+  void dispatch(VkCommandBuffer cmd) const;  // over the whole frame, after the CoC pass
+
+  vk::Buffer buffer;
+
+ private:
+  GpuFrame& frame_;
+  vk::ComputePipeline pipeline_;
+};
+
 // The pattern's DiscAreaTable in a storage buffer (int per disc index), as shaders that divide by
 // the discrete disc area read it.
 vk::Buffer make_disc_area_buffer(vk::Context& ctx, const GatherPattern& pattern);

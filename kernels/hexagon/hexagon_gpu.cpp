@@ -17,29 +17,23 @@ class HexagonGpu final : public gpu::GpuFilter {
  public:
   HexagonGpu(gpu::GpuFrame& frame, int taps)
       : frame_(frame),
-        signed_coc_(image_buffer("hexagon signed-CoC buffer")),
+        signed_coc_(frame),
         up_(image_buffer("hexagon pass-1 output 1 (up)")),
         mean_(image_buffer("hexagon pass-1 output 2 (up + down-left) / 2")),
-        prepare_(frame.ctx, vk::spirv("common/signed_coc"), {kBuffer, kBuffer, kBuffer, kBuffer},
-                 sizeof(gpu::PassParams)),
         first_(frame.ctx, vk::spirv("hexagon/first"), {kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams), {taps}),
         second_(frame.ctx, vk::spirv("hexagon/second"), {kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
                 {taps}) {
-    prepare_.bind(0, frame.color);
-    prepare_.bind(1, frame.depth);
-    prepare_.bind(2, frame.packed);
-    prepare_.bind(3, signed_coc_);
-    first_.bind(0, signed_coc_);
+    first_.bind(0, signed_coc_.buffer);
     first_.bind(1, up_);
     first_.bind(2, mean_);
     second_.bind(0, up_);
     second_.bind(1, mean_);
-    second_.bind(2, signed_coc_);
+    second_.bind(2, signed_coc_.buffer);
     second_.bind(3, frame.output);
   }
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
     const std::uint32_t w = frame_.width(), h = frame_.height();
-    prepare_.dispatch(cmd, &frame_.params, w, h);
+    signed_coc_.dispatch(cmd);
     timer.end_pass(cmd, "prepare");
     first_.dispatch(cmd, &frame_.params, (w + kOutputs - 1) / kOutputs, h);
     timer.end_pass(cmd, "up_and_downleft");
@@ -47,7 +41,7 @@ class HexagonGpu final : public gpu::GpuFilter {
     timer.end_pass(cmd, "rhombi");
   }
   std::uint64_t intermediate_bytes() const override {
-    return signed_coc_.allocated_bytes() + up_.allocated_bytes() + mean_.allocated_bytes();
+    return signed_coc_.buffer.allocated_bytes() + up_.allocated_bytes() + mean_.allocated_bytes();
   }
 
  private:
@@ -55,8 +49,9 @@ class HexagonGpu final : public gpu::GpuFilter {
     return vk::make_storage_buffer(frame_.ctx, static_cast<VkDeviceSize>(frame_.width()) * frame_.height() * 16, what);
   }
   gpu::GpuFrame& frame_;
-  vk::Buffer signed_coc_, up_, mean_;
-  vk::ComputePipeline prepare_, first_, second_;
+  gpu::SignedCocPass signed_coc_;
+  vk::Buffer up_, mean_;
+  vk::ComputePipeline first_, second_;
 };
 
 }  // namespace

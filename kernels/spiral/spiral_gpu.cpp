@@ -21,28 +21,21 @@ class SpiralGpu final : public gpu::GpuFilter {
   SpiralGpu(gpu::GpuFrame& frame, const std::vector<SpiralSample>& spiral, float clamp_factor)
       : frame_(frame),
         table_(upload_table(frame.ctx, spiral)),
-        signed_coc_(vk::make_storage_buffer(frame.ctx, static_cast<VkDeviceSize>(frame.width()) * frame.height() * 16,
-                                            "spiral signed-CoC buffer")),
-        prepare_(frame.ctx, vk::spirv("common/signed_coc"), {kBuffer, kBuffer, kBuffer, kBuffer},
-                 sizeof(gpu::PassParams)),
+        signed_coc_(frame),
         // The clamp factor is a float specialization constant: its 4 bytes travel as an int32.
         spiral_(frame.ctx, vk::spirv("spiral/spiral"), {kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
                 {static_cast<std::int32_t>(spiral.size()), std::bit_cast<std::int32_t>(clamp_factor)}) {
-    prepare_.bind(0, frame.color);
-    prepare_.bind(1, frame.depth);
-    prepare_.bind(2, frame.packed);
-    prepare_.bind(3, signed_coc_);
     spiral_.bind(0, table_);
-    spiral_.bind(1, signed_coc_);
+    spiral_.bind(1, signed_coc_.buffer);
     spiral_.bind(2, frame.output);
   }
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
-    prepare_.dispatch(cmd, &frame_.params, frame_.width(), frame_.height());
+    signed_coc_.dispatch(cmd);
     timer.end_pass(cmd, "prepare");
     spiral_.dispatch(cmd, &frame_.params, (frame_.width() + kOutputs - 1) / kOutputs, frame_.height());
     timer.end_pass(cmd, "spiral");
   }
-  std::uint64_t intermediate_bytes() const override { return table_.allocated_bytes() + signed_coc_.allocated_bytes(); }
+  std::uint64_t intermediate_bytes() const override { return table_.allocated_bytes() + signed_coc_.buffer.allocated_bytes(); }
 
  private:
   static vk::Buffer upload_table(vk::Context& ctx, const std::vector<SpiralSample>& spiral) {
@@ -54,8 +47,9 @@ class SpiralGpu final : public gpu::GpuFilter {
     return b;
   }
   gpu::GpuFrame& frame_;
-  vk::Buffer table_, signed_coc_;
-  vk::ComputePipeline prepare_, spiral_;
+  vk::Buffer table_;
+  gpu::SignedCocPass signed_coc_;
+  vk::ComputePipeline spiral_;
 };
 
 }  // namespace
