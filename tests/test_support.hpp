@@ -1,6 +1,6 @@
 #pragma once
-// Helpers several test files share: random images, sums, differences, disc radius, and the error
-// propagation of the circular filters' vertical pass.
+// Helpers several test files share: random images, frames with a given CoC, sums, differences, disc
+// radius, and the error propagation of the circular filters' vertical pass.
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -29,6 +29,18 @@ inline double max_abs_diff(const Image& a, const Image& b) {
   double m = 0.0;
   for (std::size_t i = 0; i < a.pixels.size(); ++i) m = std::max(m, std::abs(double(a.pixels[i]) - b.pixels[i]));
   return m;
+}
+
+constexpr float kFocusM = 3.0f;  // Lens{}'s focus distance
+
+// A scene with its CoC given directly (not through a lens): depth decides near (in front of the
+// focus) or far, radius_px the CoC.
+struct Frame {
+  Image color, depth_m, radius_px;
+};
+
+inline Frame black_frame(int w, int h, float depth_m, float radius_px) {
+  return {Image(w, h, 3), Image(w, h, 1, depth_m), Image(w, h, 1, radius_px)};
 }
 
 // Radius where the output along the four axis directions first drops below half the plateau

@@ -22,16 +22,6 @@ namespace {
 
 using namespace bokeh::test;
 
-constexpr float kFocusM = 3.0f;  // Lens{}'s focus distance
-
-struct Frame {
-  Image color, depth_m, radius_px;
-};
-
-Frame black_frame(int w, int h, float depth_m, float radius_px) {
-  return {Image(w, h, 3), Image(w, h, 1, depth_m), Image(w, h, 1, radius_px)};
-}
-
 Image cpu_hexagon(const Frame& f, const GatherPattern& pattern) {
   const Lens lens;
   const Image unused_packed;

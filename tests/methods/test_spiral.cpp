@@ -21,18 +21,6 @@ namespace {
 
 using namespace bokeh::test;
 
-constexpr float kFocusM = 3.0f;  // Lens{}'s focus distance
-
-// A scene with its CoC given directly (not through a lens): depth decides near (in front of the
-// focus) or far, radius_px the CoC.
-struct Frame {
-  Image color, depth_m, radius_px;
-};
-
-Frame black_frame(int w, int h, float depth_m, float radius_px) {
-  return {Image(w, h, 3), Image(w, h, 1, depth_m), Image(w, h, 1, radius_px)};
-}
-
 FilterOptions spiral_options(int n, int k, double spacing_px) {
   FilterOptions o = find_method("spiral").defaults({n, k});
   o.values["spiral_spacing_px"] = spacing_px;
