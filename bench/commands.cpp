@@ -1,7 +1,6 @@
 #include "commands.hpp"
 
 #include <algorithm>
-#include <map>
 
 #include <fmt/format.h>
 
@@ -12,21 +11,18 @@ namespace bokeh {
 
 void MethodOptionFlags::add_to(CLI::App* cmd) {
   // An option several methods share (adaptive) is one flag; its help gathers each distinct meaning.
-  std::vector<std::pair<std::string, std::string>> help_by_key;
-  std::map<std::string, std::string> flag_by_key;
+  std::vector<std::pair<const OptionSpec*, std::string>> flags;  // the first spec of each key, the help
   for (const Method& m : registered_methods())
     for (const OptionSpec& spec : m.options) {
-      auto it = std::find_if(help_by_key.begin(), help_by_key.end(), [&](const auto& kv) { return kv.first == spec.key; });
-      if (it == help_by_key.end()) {
-        help_by_key.emplace_back(spec.key, spec.help);
-        flag_by_key[spec.key] = spec.flag();
-      } else if (it->second.find(spec.help) == std::string::npos) {
+      auto it = std::find_if(flags.begin(), flags.end(), [&](const auto& f) { return f.first->key == spec.key; });
+      if (it == flags.end())
+        flags.emplace_back(&spec, spec.help);
+      else if (it->second.find(spec.help) == std::string::npos)
         it->second += " | " + spec.help;
-      }
     }
-  for (const auto& [key, help] : help_by_key)
+  for (const auto& [spec, help] : flags)
     cmd->add_option_function<std::string>(
-        flag_by_key[key], [this, key = key](const std::string& text) { given_[key] = text; }, help);
+        spec->flag(), [this, key = spec->key](const std::string& text) { given_[key] = text; }, help);
 }
 
 std::map<std::string, double> MethodOptionFlags::values_for(const std::vector<std::string>& methods) const {
