@@ -3,7 +3,8 @@
 // 1080p/41x41 buffer is 332 MiB.
 //
 // The horizontal pass computes horizontal_block pixels per invocation at stride k (flag_gpu.hpp):
-// each loaded row sample serves them all, with the same layers bit for bit.
+// each loaded row sample serves them all, with the same layers bit for bit; horizontal_bins picks how
+// a sample lands in its layer's bin (indexed or masked, flag_gpu.hpp), again with the same layers.
 //
 // Layer precisions (LayerPrecision, kernels/flag.hpp): one image format and one shader pair each.
 // The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
@@ -78,6 +79,24 @@ int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& de
   return 1;
 }
 
+const std::vector<std::string>& flag_horizontal_bins() {
+  static const std::vector<std::string> bins = {"auto", "indexed", "masked"};
+  return bins;
+}
+
+// Masked bins pay off on lavapipe only while its compiler unrolls the loop over the bins, so that
+// each bin is a register: measured at 800x600, k = 2, block 4, the horizontal pass took 67 vs 89 ms
+// (masked vs indexed) at N = 41 and 115 vs 124 ms at N = 63 (32 layers), then 898 vs 120 ms at N = 65
+// (33 layers): past 32 iterations (Mesa's usual max_unroll_iterations) the loop stays a loop and
+// every bin access becomes the per-lane array access masking was meant to avoid.
+constexpr int kSoftwareMaxMaskedLayers = 32;
+
+bool flag_masked_bins(const FilterOptions& options, const vk::DeviceInfo& device, int layers) {
+  const auto& name = flag_horizontal_bins().at(static_cast<std::size_t>(options.integer("horizontal_bins")));
+  if (name != "auto") return name == "masked";
+  return device.is_software() && layers <= kSoftwareMaxMaskedLayers;
+}
+
 namespace {
 
 void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, bool bracketed) {
@@ -124,6 +143,7 @@ class Flag final : public gpu::GpuFilter {
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
         outputs_(flag_horizontal_block(options, frame.ctx.info(), pattern_.layers())),
+        masked_bins_(flag_masked_bins(options, frame.ctx.info(), pattern_.layers())),
         tile_px_(adaptive_on(options) ? adaptive_tile_px(options) : 0),
         layer_count_(pattern_.layers()) {
     check_colour(frame, precision);
@@ -176,12 +196,13 @@ class Flag final : public gpu::GpuFilter {
     }
     check_software_bounds(frame.ctx.info(), outputs_, layer_count_, bracketed);
     const std::string variant = std::string(tile_px_ > 0 ? "_adaptive_" : "_") + to_string(precision);
-    std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px, outputs_};
+    // constant_id 4 is the tile size (adaptive; unused otherwise), 5 MASKED_BINS.
+    std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px,
+                                                      outputs_,     tile_px_,      masked_bins_ ? 1 : 0};
     std::vector<std::int32_t> vertical_constants = {layer_count_};
     std::vector<VkDescriptorType> horizontal_bindings = {kBuffer, kImage}, vertical_bindings = {kImage, kBuffer};
     if (bracketed) horizontal_bindings.push_back(kBuffer), vertical_bindings.push_back(kBuffer);
     if (tile_px_ > 0) {
-      horizontal_constants.push_back(tile_px_);
       vertical_constants.push_back(tile_px_);
       horizontal_bindings.push_back(kBuffer);                 // the tile map
       vertical_bindings.insert(vertical_bindings.end(), {kBuffer, kBuffer});  // the tile map, FLAG's input
@@ -294,6 +315,7 @@ class Flag final : public gpu::GpuFilter {
   GatherPattern pattern_;  // the (low-res) pattern the FLAG passes run
   std::uint32_t low_width_, low_height_;
   std::int32_t outputs_;   // pixels per invocation of the horizontal pass
+  bool masked_bins_;       // the horizontal pass's binning (MASKED_BINS in shaders/flag/layers.glsl)
   std::int32_t tile_px_;   // adaptive: the tile map's tile size; 0: worst case
   std::int32_t layer_count_;  // allocated: the pattern's ceil(N/2), or (adaptive) what the scene needs
   int scene_max_index_ = -1;  // adaptive: the scene's largest disc index when prepared

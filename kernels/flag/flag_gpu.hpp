@@ -20,6 +20,17 @@ namespace bokeh {
 const std::vector<std::string>& flag_horizontal_blocks();  // "auto", "1", "2", "4", "8"
 int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device, int layers);
 
+// How the horizontal pass bins a row sample into the layer its disc reaches (MASKED_BINS in
+// shaders/flag/layers.glsl), the method's option "horizontal_bins"; both add the same samples in the
+// same order, so the layers are the same bit for bit. "indexed": bins[z] += sample, one add per sample
+// (the paper's O(N + n) per pixel). "masked": every bin tests its own integer range of the sample's
+// disc index and adds the sample or -0.0: O(N n) adds but no dynamically indexed array, which lavapipe
+// turns into a scalar load and store per lane. "auto": masked on CPU devices up to 32 layers (beyond,
+// lavapipe no longer unrolls the loop over the bins and masked is the slower; flag_gpu.cpp has the
+// measurements), indexed otherwise and on GPUs.
+const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked"
+bool flag_masked_bins(const FilterOptions& options, const vk::DeviceInfo& device, int layers);
+
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
 
 VkFormat layer_format(LayerPrecision precision);  // FLAG's 3D buffer format

@@ -142,6 +142,13 @@ void declare_flag(std::vector<Method>& methods) {
                 "flag: pixels per GPU invocation of the horizontal pass, at stride k (auto: 4 on CPU devices such as "
                 "lavapipe, 1 on GPUs; every block gives the same image)",
                 0, 0, 0, false, flag_horizontal_blocks()},
+               {"horizontal_bins",
+                "flag: how the GPU horizontal pass bins each row sample into the layer its disc reaches. indexed: "
+                "bins[z] += sample (one add per sample, the paper's O(N + n)); masked: every bin tests the sample "
+                "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
+                "and store per lane); auto: masked on CPU devices such as lavapipe up to 32 layers (N = 63), indexed "
+                "beyond and on GPUs. The same image either way",
+                0, 0, 0, false, flag_horizontal_bins()},
                adaptive_option("flag, off: a ceil(N/2)-layer 3D buffer and every pixel's gather over the whole "
                                "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "
                                "GPU when the run is prepared, one int read back), a tile-max CoC map bounding each "

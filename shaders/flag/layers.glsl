@@ -5,12 +5,19 @@
 layout(constant_id = 0) const int LAYERS = 21;   // ceil(N/2): sizes the private arrays; n = LAYERS - 1
 layout(constant_id = 2) const int SPACING = 2;   // k (= params.spacing_px), a constant divisor for disc_index
 layout(constant_id = 3) const int OUTPUTS = 1;   // pixels per invocation, at stride k along the row
+// How a sample lands in its bin (the option horizontal_bins, kernels/flag/flag_gpu.hpp). The bracket
+// pass keeps the default, indexed: masked there gave lavapipe (Mesa 22.3.6) wrong brackets, off by
+// up to 2% of the largest value, without an error (the conformance tests caught it).
+layout(constant_id = 5) const bool MASKED_BINS = false;
 
 layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 
 // bins[m][z] = the row samples whose disc reaches exactly layer z in column p0.x + m k, added left to
 // right. Each loaded sample serves up to OUTPUTS columns (their offsets i - m differ); its disc
-// index is computed once, so a column's reach is a subtraction and an integer square root.
+// index is computed once, so in column m it reaches layer z = min(isqrt(d), n), d = index - (i - m)^2.
+// Indexed: bins[m][z] += s, after an integer square root. Masked: bin z takes s when z^2 <= d <
+// (z + 1)^2 (the top bin: when z^2 <= d) and -0.0 otherwise, which leaves every sum as it is; no
+// square root and no dynamically indexed array, at LAYERS compare-and-adds per sample and column.
 // reach_n (uniform, <= n): samples further than reach_n k along the row reach none of the columns,
 // and no disc reaches a layer above reach_n (LAYERS - 1 in the worst case; the adaptive passes take
 // it from the tile-max CoC map, tiles.glsl). The bins above it stay 0.
@@ -26,15 +33,17 @@ void flag_bins(ivec2 p0, int reach_n, out vec3 bins[OUTPUTS][LAYERS]) {
     for (int m = 0; m < OUTPUTS; ++m) {
       const int di = i - m;
       if (di < -reach_n || di > reach_n) continue;  // uniform: outside column m's pattern
-      const int z = reach_layer(index, di, n);
-      // A masked add to every bin rather than bins[m][z] += s: a dynamically indexed private array
-      // costs a scalar load and store per lane on lavapipe (measured: 30% of this pass), a select
-      // does not. Adding -0.0 leaves every sum exactly as it is.
-      if (z >= 0)
+      if (MASKED_BINS) {
+        const int d = index - di * di;
         for (int zz = 0; zz < LAYERS; ++zz) {
-          if (zz > reach_n) break;  // uniform
-          bins[m][zz] += zz == z ? s.rgb : vec3(-0.0);
+          // z^2 <= d < z^2 + width as one unsigned compare (d < z^2 wraps above every width).
+          const uint width = zz > reach_n ? 0u : (zz == LAYERS - 1 ? 0x7fffffffu : uint(2 * zz + 1));
+          bins[m][zz] += uint(d - zz * zz) < width ? s.rgb : vec3(-0.0);
         }
+      } else {
+        const int z = reach_layer(index, di, n);
+        if (z >= 0 && z <= reach_n) bins[m][z] += s.rgb;
+      }
     }
   }
 }

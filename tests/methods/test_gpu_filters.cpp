@@ -70,10 +70,11 @@ TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
   }
 }
 
-// Every block of outputs per invocation (gather_block, horizontal_block) keeps each pixel's order
-// of additions, so on the same packed input the GPU gives the strictly ordered CPU references' image
-// bit for bit: naive_gather_reference, and for f32 layers flag_blur_reference. Run on the packed input
-// the GPU's CoC pass wrote (its divisions may round differently from the CPU's).
+// Every block of outputs per invocation (gather_block, horizontal_block) and either binning of FLAG's
+// horizontal pass (horizontal_bins) keeps each pixel's order of additions, so on the same packed
+// input the GPU gives the strictly ordered CPU references' image bit for bit: naive_gather_reference,
+// and for f32 layers flag_blur_reference. Run on the packed input the GPU's CoC pass wrote (its
+// divisions may round differently from the CPU's).
 TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
   const Case c = GetParam();
   const Scene s = make_scene(c.scene, 63, 46);  // partial blocks and workgroups at the right and bottom
@@ -90,7 +91,8 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
     std::vector<std::string> choices;
   };
   const Variant variants[] = {{"naive", "gather_block", naive_gather_blocks()},
-                              {"flag", "horizontal_block", flag_horizontal_blocks()}};
+                              {"flag", "horizontal_block", flag_horizontal_blocks()},
+                              {"flag", "horizontal_bins", flag_horizontal_bins()}};
   for (const Variant& v : variants)
     for (std::size_t choice = 0; choice < v.choices.size(); ++choice) {
       FilterOptions o = options_for(v.method, pattern, "f32");
@@ -157,6 +159,24 @@ TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
   FilterOptions bracketed = options_for("flag", GatherPattern{81, 1}, "unorm10_bracketed");
   gpu::GpuFrame frame81(context(), s.color, s.depth_m, s.lens, bracketed.pattern);
   EXPECT_THROW(find_method("flag").make_gpu(frame81, bracketed), std::invalid_argument);
+}
+
+// horizontal_bins = auto: masked bins on CPU devices while lavapipe unrolls the loop over them (32
+// layers), indexed beyond and on GPUs; an explicit choice is taken as it is.
+TEST(FlagBins, AutoIsMaskedOnCpuDevicesUpTo32Layers) {
+  vk::DeviceInfo software;
+  software.type = "cpu";
+  vk::DeviceInfo gpu = software;
+  gpu.type = "discrete";
+  FilterOptions o = options_for("flag", GatherPattern{41, 2}, "f16");
+  EXPECT_TRUE(flag_masked_bins(o, software, 21));
+  EXPECT_TRUE(flag_masked_bins(o, software, 32));
+  EXPECT_FALSE(flag_masked_bins(o, software, 33));
+  EXPECT_FALSE(flag_masked_bins(o, gpu, 21));
+  o.values["horizontal_bins"] = 2;  // "masked"
+  EXPECT_TRUE(flag_masked_bins(o, gpu, 81));
+  o.values["horizontal_bins"] = 1;  // "indexed"
+  EXPECT_FALSE(flag_masked_bins(o, software, 21));
 }
 
 TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
