@@ -134,16 +134,17 @@ TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
 // Extremes a user will hit: they must give finite, bounded results or a failure the harness
 // measures, never a crash or a silent NaN.
 
-// An HDR highlight above half-float's largest finite value (65504). f32 layers keep it exactly;
-// RGBA16F layers cannot: the driver either saturates (lavapipe rounds toward zero, to 65504) or
-// overflows to inf. Either way the loss is visible in the numbers the harness reports.
+// A device of this type ("cpu": lavapipe's) for the choices a driver makes by device.
+vk::DeviceInfo device_of_type(const char* type) {
+  vk::DeviceInfo info;
+  info.type = type;
+  return info;
+}
+
 // lavapipe computes wrong FLAG layers past a size of the horizontal pass's bins (flag_gpu.cpp): auto
 // stays within it, and an explicit block or bracketed precision beyond it is refused, never run.
 TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
-  vk::DeviceInfo software;
-  software.type = "cpu";
-  vk::DeviceInfo gpu = software;
-  gpu.type = "discrete";
+  const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{201, 1}, "f32");
   EXPECT_EQ(flag_horizontal_block(o, software, 81), 4);
   EXPECT_EQ(flag_horizontal_block(o, software, 101), 2);
@@ -164,10 +165,7 @@ TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
 // horizontal_bins = auto: masked bins on CPU devices while lavapipe unrolls the loop over them (32
 // layers), indexed beyond and on GPUs; an explicit choice is taken as it is.
 TEST(FlagBins, AutoIsMaskedOnCpuDevicesUpTo32Layers) {
-  vk::DeviceInfo software;
-  software.type = "cpu";
-  vk::DeviceInfo gpu = software;
-  gpu.type = "discrete";
+  const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{41, 2}, "f16");
   EXPECT_TRUE(flag_masked_bins(o, software, 21));
   EXPECT_TRUE(flag_masked_bins(o, software, 32));
@@ -179,6 +177,9 @@ TEST(FlagBins, AutoIsMaskedOnCpuDevicesUpTo32Layers) {
   EXPECT_FALSE(flag_masked_bins(o, software, 21));
 }
 
+// An HDR highlight above half-float's largest finite value (65504). f32 layers keep it exactly;
+// RGBA16F layers cannot: the driver either saturates (lavapipe rounds toward zero, to 65504) or
+// overflows to inf. Either way the loss is visible in the numbers the harness reports.
 TEST(GpuExtremes, HdrHighlightBeyondHalfRangeIsMeasuredNotHidden) {
   Image color(32, 24, 3, 0.5f);
   Image depth(32, 24, 1, 3.0f);  // everything in focus: radius 0, output = input in exact arithmetic
