@@ -19,11 +19,24 @@ inline Image random_image(int w, int h, int channels, float lo, float hi, unsign
   return img;
 }
 
+// RGB uniform in [0, 4) inside a border of `margin` black pixels, reproducible for a seed: energy
+// tests keep the light far enough from the edges that no blurred disc leaves the image.
+inline Image random_image_in_black_border(int w, int h, int margin, unsigned seed) {
+  Image img = random_image(w, h, 3, 0.0f, 4.0f, seed);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
+        for (int c = 0; c < 3; ++c) img.px(x, y)[c] = 0.0f;
+  return img;
+}
+
 inline double channel_sum(const Image& image, int channel) {
   double s = 0.0;
   for (std::size_t p = 0; p < image.pixel_count(); ++p) s += image.pixels[p * image.channels + channel];
   return s;
 }
+
+inline double rgb_sum(const Image& image) { return channel_sum(image, 0) + channel_sum(image, 1) + channel_sum(image, 2); }
 
 inline double max_abs_diff(const Image& a, const Image& b) {
   double m = 0.0;

@@ -139,20 +139,15 @@ TEST_P(EnergyConservation, EnergyIsConservedAwayFromTheBorders) {
   skip_if_device_lacks(*c.method, c.options);
   // Every pixel behind the focus at the largest radius; light only inside a margin of twice it.
   const int w = 80, h = 64, margin = 2 * static_cast<int>(c.options.pattern.max_radius_px()) + 2;
-  Image color = random_image(w, h, 3, 0.0f, 4.0f, 7);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
-        for (int ch = 0; ch < 3; ++ch) color.px(x, y)[ch] = 0.0f;
+  const Image color = random_image_in_black_border(w, h, margin, 7);
   const Image depth(w, h, 1, 10.0f);
   const Lens lens = with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2);
-  auto total = [](const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); };
-  const double in = total(color);
+  const double in = rgb_sum(color);
   const double bound = c.method->storage_tolerance(c.options) * max_abs(color) * color.pixels.size() / in + 1e-5;
   for (const bool gpu : {false, true}) {
     const Image out = gpu ? run_gpu(context(), *c.method, color, depth, lens, c.options)
                           : run_cpu(*c.method, color, depth, lens, c.options, 2);
-    EXPECT_NEAR(total(out) / in, 1.0, bound) << (gpu ? "GPU" : "CPU") << ": " << c.method->energy_note;
+    EXPECT_NEAR(rgb_sum(out) / in, 1.0, bound) << (gpu ? "GPU" : "CPU") << ": " << c.method->energy_note;
   }
 }
 

@@ -529,11 +529,7 @@ TEST(CircularAdaptive, RadiusZeroIsTheIdentity) {
 // black border wider than the kernels: the total light is kept (f32: rounding only).
 TEST(CircularAdaptive, ConstantRadiusKeepsTheEnergy) {
   const int w = 90, h = 80, margin = 22;
-  Image color = random_image(w, h, 3, 0.0f, 4.0f, 9);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
-        for (int c = 0; c < 3; ++c) color.px(x, y)[c] = 0.0f;
+  const Image color = random_image_in_black_border(w, h, margin, 9);
   const Image depth(w, h, 1, 10.0f);
   for (float r : {0.8f, 4.0f, 6.3f, 16.0f}) {
     const Image radius(w, h, 1, r);

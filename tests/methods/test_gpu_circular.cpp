@@ -544,14 +544,9 @@ TEST(GpuCircularAdaptive, RadiusZeroIsIdentityAndEnergyIsKept) {
       const double max_color = max_abs_value(s.color);
       // Energy: every pixel behind the focus at one radius, light only inside a margin wider than it.
       const int w = 80, h = 64, margin = 2 * 8 + 2;
-      Image color = random_image(w, h, 3, 0.0f, 4.0f, 7);
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-          if (x < margin || y < margin || x >= w - margin || y >= h - margin)
-            for (int c = 0; c < 3; ++c) color.px(x, y)[c] = 0.0f;
+      const Image color = random_image_in_black_border(w, h, margin, 7);
       const Image depth(w, h, 1, 10.0f);
-      auto total = [](const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); };
-      const double in = total(color);
+      const double in = rgb_sum(color);
       for (const bool gpu : {false, true}) {
         const Image identity = gpu ? run_gpu(context(), method, s.color, s.depth_m, s.lens, o)
                                    : run_cpu(method, s.color, s.depth_m, s.lens, o, 2);
@@ -562,7 +557,7 @@ TEST(GpuCircularAdaptive, RadiusZeroIsIdentityAndEnergyIsKept) {
           const Image out =
               gpu ? run_gpu(context(), method, color, depth, lens, o) : run_cpu(method, color, depth, lens, o, 2);
           const double bound = method.storage_tolerance(o) * max_abs_value(color) * color.pixels.size() / in + 1e-5;
-          EXPECT_NEAR(total(out) / in, 1.0, bound)
+          EXPECT_NEAR(rgb_sum(out) / in, 1.0, bound)
               << method.name << " " << o.precision << (gpu ? " GPU" : " CPU") << ", radius " << radius;
         }
       }

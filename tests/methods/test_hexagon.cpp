@@ -29,7 +29,6 @@ Image cpu_hexagon(const Frame& f, const GatherPattern& pattern) {
   return find_method("hexagon").cpu_reference({f.color, f.depth_m, lens, f.radius_px, unused_packed, o, 2});
 }
 
-double total(const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); }
 
 // The regular hexagon with vertices at (0, +-R) and (+-R sqrt3/2, +-R/2): the R for which (dx, dy) lies
 // on its boundary (its sides: |dx| = R sqrt3/2 and |dx| / 2 + |dy| sqrt3/2 = R sqrt3/2).
@@ -103,11 +102,7 @@ TEST(Hexagon, RadiusZeroIsExactlyTheIdentity) {
 
 Frame textured_frame(int w, int h, int margin, unsigned seed) {
   Frame f = black_frame(w, h, 10.0f, 0.0f);
-  f.color = random_image(w, h, 3, 0.0f, 4.0f, seed);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
-        for (int c = 0; c < 3; ++c) f.color.px(x, y)[c] = 0.0f;
+  f.color = random_image_in_black_border(w, h, margin, seed);
   return f;
 }
 
@@ -123,7 +118,7 @@ TEST(Hexagon, VaryingCocConservesEnergyWhenTheNearFarRuleHidesNothing) {
       f.depth_m.pixels[i] = near ? 1.0f : 10.0f;
       f.radius_px.pixels[i] = near ? 8.0f * cocs.pixels[i] : 4.0f + 4.0f * cocs.pixels[i];  // far: in [4, 8]
     }
-    const double ratio = total(cpu_hexagon(f, {17, 1})) / total(f.color);  // largest radius 8
+    const double ratio = rgb_sum(cpu_hexagon(f, {17, 1})) / rgb_sum(f.color);  // largest radius 8
     std::printf("[hexagon] varying CoC, all %s: energy out / in %.7f\n", near ? "near" : "far", ratio);
     EXPECT_NEAR(ratio, 1.0, 1e-5) << (near ? "near" : "far");
   }
@@ -139,7 +134,7 @@ TEST(Hexagon, NearFarRuleHidesBackgroundLight) {
   for (int y = 24; y <= 40; ++y)
     for (int x = 30; x <= 50; ++x) *f.depth_m.px(x, y) = 1.0f, *f.radius_px.px(x, y) = 0.0f;  // sharp foreground
   const Image out = cpu_hexagon(f, {17, 1});
-  const double ratio = total(out) / total(f.color);
+  const double ratio = rgb_sum(out) / rgb_sum(f.color);
   std::printf("[hexagon] blurred background around a sharp foreground: energy out / in %.4f\n", ratio);
   EXPECT_LT(ratio, 0.99);
   for (int y = 24; y <= 40; ++y)

@@ -75,7 +75,6 @@ FilterOptions options(const GatherPattern& pattern, double max_sprites = 65536, 
   return o;
 }
 
-double total(const Image& img) { return channel_sum(img, 0) + channel_sum(img, 1) + channel_sum(img, 2); }
 
 double max_abs(const Image& img) {
   double m = 0;
@@ -131,7 +130,7 @@ TEST(Sprites, OverflowPastTheMaximumIsCountedReportedAndKeepsTheLight) {
   const TestScene s = highlight_scene(96, 64, grid_of_highlights(5.0f), 6.5f, false);
   const FilterOptions o = options({17, 1}, 5);
   const Both b = run_both(s, o);
-  const double in = total(s.color);
+  const double in = rgb_sum(s.color);
   for (const auto& [stats, out, side] : {std::tuple{&b.cpu_stats, &b.cpu, "CPU"}, {&b.gpu_stats, &b.gpu, "GPU"}}) {
     SCOPED_TRACE(side);
     EXPECT_EQ((*stats)["sprites_detected"], 12);
@@ -140,7 +139,7 @@ TEST(Sprites, OverflowPastTheMaximumIsCountedReportedAndKeepsTheLight) {
     EXPECT_EQ((*stats)["sprite_overflow"], true);
     EXPECT_EQ((*stats)["max_sprites"], 5);
     // The 7 left over are gathered instead: nothing is lost (every disc lies inside the image).
-    EXPECT_NEAR(total(*out) / in, 1.0, 1e-5);
+    EXPECT_NEAR(rgb_sum(*out) / in, 1.0, 1e-5);
   }
   // max_sprites 0: every highlight overflows into the gather, which is then the naive gather.
   const Both none = run_both(s, options({17, 1}, 0));
@@ -201,14 +200,10 @@ TEST(Sprites, RadiusZeroIsTheIdentityEvenWithSpritesDrawn) {
 TEST(Sprites, EnergyIsConservedWhateverTheSpritesTake) {
   SKIP_IF_NO_GRAPHICS();
   const int w = 80, h = 64, margin = 10;
-  Image color = random_image(w, h, 3, 0.0f, 4.0f, 11);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      if (x < margin || y < margin || x >= w - margin || y >= h - margin)
-        for (int c = 0; c < 3; ++c) color.px(x, y)[c] = 0.0f;
+  const Image color = random_image_in_black_border(w, h, margin, 11);
   const Image depth(w, h, 1, 10.0f);
   const TestScene s{color, depth, with_max_coc_radius(Lens{}, depth, 8.0)};
-  const double in = total(color);
+  const double in = rgb_sum(color);
   for (const double threshold : {0.25, 1.0, 100.0}) {
     SCOPED_TRACE(threshold);
     const Both b = run_both(s, options({17, 1}, 65536, threshold));
@@ -216,8 +211,8 @@ TEST(Sprites, EnergyIsConservedWhateverTheSpritesTake) {
       EXPECT_GT(b.gpu_stats["sprites_drawn"].get<int>(), 100);
     }
     EXPECT_EQ(b.gpu_stats["sprites_detected"], b.cpu_stats["sprites_detected"]);
-    EXPECT_NEAR(total(b.cpu) / in, 1.0, 1e-5);
-    EXPECT_NEAR(total(b.gpu) / in, 1.0, 1e-5);
+    EXPECT_NEAR(rgb_sum(b.cpu) / in, 1.0, 1e-5);
+    EXPECT_NEAR(rgb_sum(b.gpu) / in, 1.0, 1e-5);
   }
 }
 
