@@ -1,10 +1,13 @@
 #pragma once
-// Helpers several test files share: random images, frames with a given CoC, sums, differences, disc
-// radius, and the error propagation of the circular filters' vertical pass.
+// Helpers several test files share: random images, frames with a given CoC, sums, bit-for-bit and
+// numeric differences, disc radius, and the error propagation of the circular filters' vertical pass.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "image.hpp"
 
@@ -37,6 +40,15 @@ inline double channel_sum(const Image& image, int channel) {
 }
 
 inline double rgb_sum(const Image& image) { return channel_sum(image, 0) + channel_sum(image, 1) + channel_sum(image, 2); }
+
+// The same floats bit for bit (so -0 differs from +0 and NaNs compare), naming the first difference.
+inline ::testing::AssertionResult same_bits(const Image& a, const Image& b) {
+  if (!a.same_shape(b)) return ::testing::AssertionFailure() << "shapes differ";
+  for (std::size_t i = 0; i < a.pixels.size(); ++i)
+    if (std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0)
+      return ::testing::AssertionFailure() << "value " << i << ": " << a.pixels[i] << " vs " << b.pixels[i];
+  return ::testing::AssertionSuccess();
+}
 
 inline double max_abs_diff(const Image& a, const Image& b) {
   double m = 0.0;

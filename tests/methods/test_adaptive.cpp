@@ -32,10 +32,6 @@ namespace {
 
 using namespace bokeh::test;
 
-bool same_bits(const Image& a, const Image& b) {
-  return a.same_shape(b) && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
-}
-
 FilterOptions options_for(const std::string& method, const GatherPattern& pattern, bool adaptive, int tile_px = 16,
                           const std::string& precision = "", int scale = 1) {
   const Method& m = find_method(method);

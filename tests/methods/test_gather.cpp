@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <numeric>
 #include <random>
 #include <set>
@@ -111,14 +110,6 @@ std::vector<PackedScene> packed_scenes() {
       out.push_back({name, p, cpu_coc_pass(s.color, s.depth_m, lens, p, 2).packed});
     }
   return out;
-}
-
-::testing::AssertionResult same_bits(const Image& a, const Image& b) {
-  if (!a.same_shape(b)) return ::testing::AssertionFailure() << "shapes differ";
-  for (std::size_t i = 0; i < a.pixels.size(); ++i)
-    if (std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0)
-      return ::testing::AssertionFailure() << "value " << i << ": " << a.pixels[i] << " vs " << b.pixels[i];
-  return ::testing::AssertionSuccess();
 }
 
 TEST(CpuReferences, VectorisedNaiveGatherEqualsTheReferenceBitForBit) {

@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 
 #include "coc.hpp"
 #include "flag.hpp"
@@ -12,9 +11,12 @@
 #include "naive_gpu.hpp"
 #include "run.hpp"
 #include "scene.hpp"
+#include "test_support.hpp"
 
 namespace bokeh {
 namespace {
+
+using test::same_bits;
 
 // Largest per-channel difference relative to the reference's largest value.
 double max_rel_error(const Image& a, const Image& ref) {
@@ -82,9 +84,6 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
   gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
   vk::TimestampQueries timer(context(), 16);
-  auto same_bits = [](const Image& a, const Image& b) {
-    return a.same_shape(b) && std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
-  };
   struct Variant {
     const char* method;
     const char* option;
