@@ -21,15 +21,19 @@ std::string m_name(int components) { return "circular" + std::to_string(componen
 // Both kernels blur a disc of the pattern's max radius k (N - 1) / 2: the circular filters take
 // their (fixed) kernel from the same gather-size axis as naive and FLAG, so a sweep compares them at
 // the same largest CoC; the per-pixel CoC enters through the near/far alpha w = radius / max radius.
+float disc_radius_px(const FilterOptions& o) { return std::max(1.0f, o.pattern.max_radius_px()); }
+
 int tap_radius(int components, const FilterOptions& o) {
-  return make_circular_kernel_for_disc(components, std::max(1.0f, o.pattern.max_radius_px())).radius_px;
+  return make_circular_kernel_for_disc(components, disc_radius_px(o)).radius_px;
 }
+
+int bucket_count(const FilterOptions& o) { return circular_buckets(disc_radius_px(o)).count(); }
 
 bool adaptive(const FilterOptions& o) { return o.integer("adaptive") == 1; }
 
 // The kernels one field convolves with: the max radius's (adaptive off), or every bucket's (on).
 std::vector<CircularKernel> field_kernels(int components, const FilterOptions& o) {
-  const float disc = std::max(1.0f, o.pattern.max_radius_px());
+  const float disc = disc_radius_px(o);
   if (!adaptive(o)) return {make_circular_kernel_for_disc(components, disc)};
   std::vector<CircularKernel> kernels;
   for (float rho : circular_buckets(disc).disc_radius_px)
@@ -55,7 +59,7 @@ std::vector<PassWork> adaptive_work(int far, const FilterOptions& o, int w, int 
   const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
   const double component = static_cast<double>(circular_component_bytes_per_pixel(precision));
   const double box = precision == IntermediatePrecision::bracketed10 ? 8 : 0;
-  const int buckets = circular_buckets(std::max(1.0f, o.pattern.max_radius_px())).count();
+  const int buckets = bucket_count(o);
   std::vector<PassWork> work = {{"layers", px, px * 36, px * 32},
                                 {"tiles", 0, tiles * 2 * 4 * 2, tiles * 2 * 4 * (1 + 2.0 * buckets)}};
   for (const auto& [field, c] : {std::pair<std::string, int>{"far", far}, {"near", o.integer("near_components")}}) {
@@ -174,7 +178,7 @@ Method circular_method(int components) {
       // The field's sum (RGBA f32), the bucket table, and the tiles: list counts and two masks per
       // field and tile, and one list per bucket, field and pass (tiles.glsl).
       const auto tiles = static_cast<std::uint64_t>(tile_count(w, h));
-      const int buckets = circular_buckets(std::max(1.0f, o.pattern.max_radius_px())).count();
+      const int buckets = bucket_count(o);
       const std::uint64_t sum = px * 16, table = kCircularBucketTableBytes;
       const std::uint64_t tile_bytes =
           4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
@@ -224,7 +228,7 @@ Method circular_method(int components) {
   // intermediates overflow at 65504 / S; f32 and bracketed10 (whose vertical pass rebuilds I in f32)
   // at f32's largest value over the vertical pass's second sum, 2 S^2.
   m.input_limit = [components](const FilterOptions& o) {
-    const double disc = std::max(1.0f, o.pattern.max_radius_px());
+    const double disc = disc_radius_px(o);
     double s = 0;
     for (int c : {components, o.integer("near_components")})
       for (const auto& taps : make_circular_kernel_for_disc(c, disc).taps) {
