@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "ceil_div.hpp"
 #include "vk/spirv.hpp"
 
 namespace bokeh {
@@ -53,7 +54,6 @@ namespace gpu {
 
 namespace {
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / b; }
 }  // namespace
 
 std::uint64_t CocTilesGpu::bytes(int width_px, int height_px, int tile_px) {

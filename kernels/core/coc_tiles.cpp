@@ -6,11 +6,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "ceil_div.hpp"
+
 namespace bokeh {
 
 namespace {
-
-int ceil_div(int a, int b) { return (a + b - 1) / b; }
 
 // ceil(gap / k) for the pixel gap between tiles d tiles apart: (|d| - 1) tile_px + 1 px, 0 for d = 0.
 int gap_samples(int d, int tile_px, int spacing_px) {

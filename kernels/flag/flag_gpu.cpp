@@ -32,6 +32,7 @@
 
 #include <fmt/format.h>
 
+#include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
 #include "flag_gpu.hpp"
 #include "flag_reduced.hpp"
@@ -120,8 +121,6 @@ namespace {
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
 constexpr std::int32_t kBracketChunk = 32;  // pixels per invocation of flag_bracket.comp
 
-
-std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / b; }
 
 // The unsigned formats cannot hold negative layer values: check the uploaded colour once, with the
 // CPU reference's message.

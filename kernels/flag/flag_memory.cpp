@@ -3,10 +3,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "ceil_div.hpp"
+
 namespace bokeh {
 
 namespace {
-int ceil_div(int a, int b) { return (a + b - 1) / b; }
 void check_scale(int scale) {
   if (scale != 1 && scale != 2 && scale != 4)
     throw std::invalid_argument("buffer scale must be 1 (full), 2 (half) or 4 (quarter), got " + std::to_string(scale));

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
 #include "flag.hpp"
 #include "flag_gpu.hpp"
@@ -15,8 +16,6 @@
 namespace bokeh::methods {
 
 namespace {
-
-int ceil_div(int a, int b) { return (a + b - 1) / b; }
 
 std::vector<PassWork> flag_work(const FilterOptions& o, int w, int h) {
   const LayerPrecision precision = layer_precision_from_string(o.precision);

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "ceil_div.hpp"
 #include "coc.hpp"
 
 namespace bokeh {
@@ -14,7 +15,6 @@ void check_scale(int scale) {
   if (scale != 1 && scale != 2 && scale != 4)
     throw std::invalid_argument("buffer scale must be 1 (full), 2 (half) or 4 (quarter), got " + std::to_string(scale));
 }
-int ceil_div(int a, int b) { return (a + b - 1) / b; }
 }  // namespace
 
 GatherPattern reduced_pattern(const GatherPattern& full, int scale) {

@@ -5,6 +5,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
 #include "vk/spirv.hpp"
 
@@ -30,8 +31,6 @@ GatherBlock naive_gather_block(const FilterOptions& options, const vk::DeviceInf
 }
 
 namespace {
-
-std::uint32_t ceil_div(std::uint32_t a, std::uint32_t b) { return (a + b - 1) / b; }
 
 class NaiveGather final : public gpu::GpuFilter {
  public:
