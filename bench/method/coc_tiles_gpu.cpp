@@ -57,8 +57,7 @@ constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
 }  // namespace
 
 std::uint64_t CocTilesGpu::bytes(int width_px, int height_px, int tile_px) {
-  const auto tiles = static_cast<std::uint64_t>(ceil_div(static_cast<std::uint32_t>(width_px), tile_px)) *
-                     ceil_div(static_cast<std::uint32_t>(height_px), tile_px);
+  const auto tiles = static_cast<std::uint64_t>(ceil_div(width_px, tile_px)) * ceil_div(height_px, tile_px);
   return (tiles + 1) * 16;
 }
 
@@ -83,9 +82,8 @@ void CocTilesGpu::record(VkCommandBuffer cmd, vk::TimestampQueries* timer, const
   barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
   vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
                        nullptr, 0, nullptr);
-  const auto t = static_cast<std::uint32_t>(tile_px_);
-  const std::uint32_t tx = ceil_div(static_cast<std::uint32_t>(grid.width_px), t),
-                      ty = ceil_div(static_cast<std::uint32_t>(grid.height_px), t);
+  const auto tx = static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
+             ty = static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_));
   tile_max_.dispatch(cmd, &grid, tx, ty);
   if (timer) timer->end_pass(cmd, "tile_max");
   tile_reach_.dispatch(cmd, &grid, tx, ty);
@@ -101,8 +99,8 @@ int CocTilesGpu::read_scene_max_index() const {
 CocTiles CocTilesGpu::read(int width_px, int height_px, std::vector<int>* write_layers) const {
   CocTiles t;
   t.tile_px = tile_px_;
-  t.tiles_x = static_cast<int>(ceil_div(static_cast<std::uint32_t>(width_px), static_cast<std::uint32_t>(tile_px_)));
-  t.tiles_y = static_cast<int>(ceil_div(static_cast<std::uint32_t>(height_px), static_cast<std::uint32_t>(tile_px_)));
+  t.tiles_x = ceil_div(width_px, tile_px_);
+  t.tiles_y = ceil_div(height_px, tile_px_);
   const std::size_t count = static_cast<std::size_t>(t.tiles_x) * t.tiles_y;
   std::vector<std::int32_t> raw((count + 1) * 4);
   vk::download(ctx_, buffer_, raw.data(), raw.size() * sizeof(std::int32_t));

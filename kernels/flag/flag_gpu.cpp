@@ -302,8 +302,8 @@ class Flag final : public gpu::GpuFilter {
   // FLAG's grid (full or reduced resolution) for the frame region `full`, with its pattern's n.
   PassParams grid_params(const PassParams& full) const {
     PassParams low = full;
-    low.width_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.width_px), scale_));
-    low.height_px = static_cast<std::int32_t>(ceil_div(static_cast<std::uint32_t>(full.height_px), scale_));
+    low.width_px = ceil_div(full.width_px, scale_);
+    low.height_px = ceil_div(full.height_px, scale_);
     low.half_n = pattern_.half();
     low.max_radius_px = pattern_.max_radius_px();
     return low;
