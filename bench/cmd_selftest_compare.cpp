@@ -1,26 +1,26 @@
-// `bokehbench selftest-compare`: measures `compare` itself on this machine. It runs the CI sweep
-// (figure9 --quick --budget-s 60, as .ci/regression) repeatedly, with and without a known injected slowdown and, optionally, as a
-// "second machine" (half the threads), interleaving the conditions, then compares every pair:
-//   false alarms   A/A pairs (the same code twice) with a confident regression
-//   detection      A against +P% runs (every sample ran P% more frames than it reports)
-//   cross-machine  A against the half-thread runs, both ways (CI runs on another machine than the
-//                  baseline's; normalisation by the calibration probes is what should carry over)
-// for several thresholds, on normalised and raw times. It is a benchmark (minutes), not a test.
+// `bokehbench selftest-compare`: measures CI's regression check itself on this machine. It runs
+// `bokehbench ab` (paired, as .ci/regression does) repeatedly between two builds of the same code,
+// interleaving the conditions, and counts:
+//   false alarms   A/A runs (no change) that fail, and points found slower
+//   detection      runs with a known slowdown of every point, or of one point (a different one each
+//                  run), injected into the candidate's times, that fail, and whether the slowed
+//                  point was the one found
+// and, from the A/A runs' intervals, the smallest slowdown of one point found in 95% of runs (a
+// slowdown s multiplies the candidate's paired times, so it moves each interval by exactly 1 + s).
+// It is a benchmark (an hour with the defaults), not a test.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <sstream>
-#include <thread>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-#include <unistd.h>
 
 #include "commands.hpp"
 #include "compare.hpp"
+#include "paired.hpp"
 #include "report.hpp"
 
 namespace bokeh {
@@ -28,76 +28,18 @@ namespace bokeh {
 namespace {
 
 struct SelftestOptions {
-  int runs = 5;
-  std::vector<int> slowdowns_pct = {10, 25};
-  std::vector<double> thresholds_pct = {5, 10, 15, 20, 25};
-  bool cross_machine = false;
-  std::string sweep = "figure9 --quick --budget-s 60";  // what .ci/regression runs
-  std::string work_dir = "build/selftest-compare", out = "results/selftest_compare.json";
-  bool reuse = false;
+  std::string baseline = "build", candidate = "build";
+  int runs = 20, injected_runs = 5;
+  std::vector<double> slowdowns_pct = {10, 25};
+  double threshold_pct = 5;  // what .ci/regression uses
+  std::string sweep = "figure9 --quick";
+  std::string out = "results/selftest_compare.json";
 };
 
 struct Condition {
-  std::string name;  // a, slow10, slow25, half
-  int slowdown_pct = 0;
-  bool half_threads = false;
-};
-
-std::string self_exe() {
-  std::error_code ec;
-  const auto p = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (ec) throw std::runtime_error("cannot find this program's path (/proc/self/exe)");
-  return p.string();
-}
-
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-// Runs the sweep for one condition; returns the results file.
-std::string run_sweep_process(const SelftestOptions& o, const Condition& c, int run, const std::string& exe) {
-  const std::string dir = fmt::format("{}/{}_{}", o.work_dir, c.name, run);
-  std::istringstream words(o.sweep);
-  std::string name, args;
-  words >> name;
-  for (std::string w; words >> w;) args += " " + shell_quote(w);
-  const std::string result = dir + "/" + name + ".json";
-  if (o.reuse && std::filesystem::exists(result)) return result;
-  if (o.sweep.find("--no-plot") == std::string::npos) args += " --no-plot";
-  std::string cmd = fmt::format("{} {}{} --out-dir {}", shell_quote(exe), shell_quote(name), args, shell_quote(dir));
-  if (c.slowdown_pct) cmd += fmt::format(" --inject-slowdown-pct {}", c.slowdown_pct);
-  if (c.half_threads) {
-    const unsigned cores = std::max(2u, std::thread::hardware_concurrency());
-    cmd = fmt::format("LP_NUM_THREADS={} {} --cpu-threads {}", cores / 2, cmd, cores / 2);
-  }
-  std::filesystem::create_directories(dir);
-  cmd += " > " + shell_quote(dir + "/log.txt") + " 2>&1";
-  const auto start = std::chrono::steady_clock::now();
-  std::fflush(stdout);
-  const int status = std::system(cmd.c_str());
-  if (status != 0) throw std::runtime_error(fmt::format("the sweep failed ({}): see {}/log.txt", cmd, dir));
-  fmt::print("  {:<8} run {}: {:.0f} s\n", c.name, run,
-             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  return result;
-}
-
-struct Tally {
-  int pairs = 0, pairs_flagged = 0;    // compare's exit status 2 (any point slower)
-  int points = 0, points_flagged = 0;  // points with the verdict slower
-  int points_same = 0, points_inconclusive = 0;
-  nlohmann::json to_json() const {
-    auto rate = [](int a, int b) { return b ? static_cast<double>(a) / b : 0.0; };
-    return {{"pairs", pairs},
-            {"pairs_flagged", pairs_flagged},
-            {"pair_rate", rate(pairs_flagged, pairs)},
-            {"points", points},
-            {"points_slower", points_flagged},
-            {"point_rate", rate(points_flagged, points)},
-            {"points_same", points_same},
-            {"points_inconclusive", points_inconclusive}};
-  }
+  std::string name;  // a_a, every_10, one_10, ...
+  double slowdown_pct = 0;
+  bool one_point = false;
 };
 
 double quantile(std::vector<double> v, double q) {
@@ -109,147 +51,150 @@ double quantile(std::vector<double> v, double q) {
   return v[lo] + (v[hi] - v[lo]) * (pos - static_cast<double>(lo));
 }
 
+std::string executable(const std::string& build) {
+  return std::filesystem::is_directory(build) ? (std::filesystem::path(build) / "bokehbench").string() : build;
+}
+
 void selftest(const SelftestOptions& o) {
-  if (o.runs < 2) throw std::invalid_argument("--runs must be at least 2 (A/A pairs)");
-  std::vector<Condition> conditions = {{"a", 0, false}};
-  for (int pct : o.slowdowns_pct) conditions.push_back({fmt::format("slow{}", pct), pct, false});
-  if (o.cross_machine) conditions.push_back({"half", 0, true});
-  const std::string exe = self_exe();
-  fmt::print("selftest-compare: {} runs of '{}' per condition ({}), interleaved; work in {}\n", o.runs, o.sweep,
-             fmt::join([&] {
-               std::vector<std::string> n;
-               for (const auto& c : conditions) n.push_back(c.name);
-               return n;
-             }(), ", "),
-             o.work_dir);
+  std::vector<Condition> conditions = {{"a_a", 0, false}};
+  for (double pct : o.slowdowns_pct) {
+    conditions.push_back({fmt::format("every_{:g}", pct), pct, false});
+    conditions.push_back({fmt::format("one_{:g}", pct), pct, true});
+  }
+  paired::Options base;
+  base.baseline_exe = std::filesystem::absolute(executable(o.baseline)).string();
+  base.candidate_exe = std::filesystem::absolute(executable(o.candidate)).string();
+  std::istringstream words(o.sweep);
+  base.sweep.clear();
+  for (std::string w; words >> w;) base.sweep.push_back(w);
+  base.rule.threshold = o.threshold_pct / 100;
+  base.progress = false;
+
+  std::vector<std::string> ids;  // the compared points, from the first run
+  std::map<std::string, nlohmann::json> runs;
+  std::map<std::string, int> done;
   const auto start = std::chrono::steady_clock::now();
-  std::map<std::string, std::vector<nlohmann::json>> docs;
-  std::map<std::string, std::vector<std::string>> paths;
-  for (int run = 0; run < o.runs; ++run)
+  const int most = std::max(o.runs, o.injected_runs);
+  const int total = o.runs + o.injected_runs * static_cast<int>(conditions.size() - 1);
+  int finished = 0;
+  fmt::print("selftest-compare: {} A/A runs and {} of each injected slowdown of `ab --sweep \"{}\"` at {:g}%, "
+             "interleaved\n", o.runs, o.injected_runs, o.sweep, o.threshold_pct);
+  for (int r = 0; r < most; ++r)
     for (std::size_t k = 0; k < conditions.size(); ++k) {
-      // Rotate the order each run so that drift over the session does not favour one condition.
-      const Condition& c = conditions[(k + static_cast<std::size_t>(run)) % conditions.size()];
-      const std::string path = run_sweep_process(o, c, run, exe);
-      paths[c.name].push_back(path);
-      docs[c.name].push_back(compare::load_results(path));
+      // Rotate the order each run so that drift over the session favours no condition.
+      const Condition& c = conditions[(k + static_cast<std::size_t>(r)) % conditions.size()];
+      if (done[c.name] >= (c.slowdown_pct > 0 ? o.injected_runs : o.runs)) continue;
+      if (c.slowdown_pct > 0 && ids.empty()) continue;  // the point list comes from an A/A run
+      paired::Options run = base;
+      run.seed = static_cast<std::uint64_t>(1000 * r + k + 1);
+      run.inject_slowdown_pct = c.slowdown_pct;
+      std::string injected;
+      if (c.one_point) injected = ids[static_cast<std::size_t>(done[c.name] * 7 + r) % ids.size()];  // a spread of points
+      if (!injected.empty()) run.inject_points = {injected};
+      const auto t0 = std::chrono::steady_clock::now();
+      const compare::Report report = paired::run(run);
+      const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (!report.mismatches.empty()) throw std::runtime_error("not comparable: " + report.mismatches.front());
+      nlohmann::json points = nlohmann::json::array();
+      std::vector<std::string> slower;
+      for (const auto& p : report.points) {
+        if (ids.size() < report.points.size()) ids.push_back(p.id);
+        const auto& ci = p.judgement.interval;
+        points.push_back({{"id", p.id},
+                          {"verdict", compare::to_string(p.judgement.verdict)},
+                          {"measured_again", p.times.find("measured again") != std::string::npos},
+                          {"low", ci.exists ? ci.low : 0.0},
+                          {"high", ci.exists ? ci.high : 0.0},
+                          {"pairs", p.baseline_samples}});
+        if (p.judgement.verdict == compare::Verdict::slower) slower.push_back(p.id);
+      }
+      runs[c.name].push_back({{"seed", run.seed},
+                              {"injected_point", injected},
+                              {"exit_code", report.exit_code()},
+                              {"slower", slower},
+                              {"seconds", run_s},
+                              {"points", points}});
+      ++done[c.name];
+      ++finished;
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      fmt::print("[{}/{}] {:<9} run {:>2}: exit {}, {} slower{}, {:.0f} s; ~{:.0f} min left\n", finished, total, c.name,
+                 done[c.name], report.exit_code(), slower.size(), injected.empty() ? "" : " (slowed: " + injected + ")",
+                 run_s, elapsed / finished * (total - finished) / 60);
+      std::fflush(stdout);
     }
-  const double sweeps_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // Every pair at every threshold, for compare's default (CPU time on lavapipe, normalised) and the
-  // alternatives.
-  struct Variant {
-    const char* label;
-    const char* times;
-    const char* normalise;
-  };
-  const Variant variants[] = {{"default (--times auto --normalise auto)", "auto", "auto"},
-                              {"cpu time, raw", "cpu", "none"},
-                              {"wall time, normalised", "wall", "auto"},
-                              {"wall time, raw", "wall", "none"}};
-  nlohmann::json by_times = nlohmann::json::object();
-  for (const Variant& variant : variants) {
-    nlohmann::json by_threshold = nlohmann::json::array();
-    for (double t_pct : o.thresholds_pct) {
-      compare::Options opt;
-      opt.rule.threshold = t_pct / 100;
-      opt.times = variant.times;
-      opt.normalise = variant.normalise;
-      std::vector<double> aa_low, aa_half_width;  // A/A interval lows and half widths, per point
-      auto tally = [&](const std::string& base, const std::string& cur, bool skip_same_run, Tally& t,
-                       std::vector<double>* lows, double scale) {
-        for (std::size_t i = 0; i < docs[base].size(); ++i)
-          for (std::size_t j = 0; j < docs[cur].size(); ++j) {
-            if (skip_same_run && i == j) continue;
-            const compare::Report r = compare::compare_results(docs[base][i], docs[cur][j], opt, paths[base][i], paths[cur][j]);
-            if (!r.mismatches.empty())
-              throw std::runtime_error(fmt::format("{} and {} are not comparable: {}", paths[base][i], paths[cur][j],
-                                                   r.mismatches.front()));
-            ++t.pairs;
-            if (r.exit_code() == compare::kRegression) ++t.pairs_flagged;
-            for (const auto& p : r.points) {
-              ++t.points;
-              t.points_flagged += p.judgement.verdict == compare::Verdict::slower;
-              t.points_same += p.judgement.verdict == compare::Verdict::same;
-              t.points_inconclusive += p.judgement.verdict == compare::Verdict::inconclusive;
-              if (lows && p.judgement.interval.exists) {
-                lows->push_back(p.judgement.interval.low / scale);
-                aa_half_width.push_back(std::sqrt(p.judgement.interval.high / p.judgement.interval.low) - 1);
-              }
-            }
-          }
-      };
-      Tally aa;
-      tally("a", "a", true, aa, &aa_low, 1.0);
-      nlohmann::json entry = {{"threshold_pct", t_pct}, {"a_a", aa.to_json()}};
-      std::vector<double> all_lows = aa_low;  // A/A lows, and injected lows scaled back by the known slowdown
-      for (const Condition& c : conditions) {
-        if (c.slowdown_pct == 0) continue;
-        Tally d;
-        tally("a", c.name, false, d, &all_lows, 1 + c.slowdown_pct / 100.0);
-        entry[fmt::format("slowdown_{}pct", c.slowdown_pct)] = d.to_json();
+  // Per condition: runs that failed, points found slower, and (one point) whether it was the slowed one.
+  nlohmann::json summary = nlohmann::json::object();
+  for (const Condition& c : conditions) {
+    int failed = 0, points = 0, points_slower = 0, slowed_found = 0, others_found = 0;
+    for (const auto& run : runs[c.name]) {
+      failed += run["exit_code"].get<int>() == compare::kRegression;
+      for (const auto& p : run["points"]) {
+        ++points;
+        const bool slow = p["verdict"] == "slower";
+        points_slower += slow;
+        if (c.one_point) (p["id"] == run["injected_point"] ? slowed_found : others_found) += slow;
       }
-      if (o.cross_machine) {
-        Tally x;
-        tally("a", "half", false, x, nullptr, 1.0);
-        tally("half", "a", false, x, nullptr, 1.0);
-        entry["cross_machine"] = x.to_json();
-      }
-      // A slowdown s multiplies the current's samples by 1 + s, so a point is flagged when
-      // low_AA (1 + s) > 1 + t: the slowdown detected 95% of the time is (1 + t) / q05(low_AA) - 1.
-      if (!all_lows.empty()) {
-        entry["smallest_slowdown_detected_95pct"] = (1 + t_pct / 100) / quantile(all_lows, 0.05) - 1;
-        entry["interval_half_width_median"] = quantile(aa_half_width, 0.5);
-        entry["lows_used"] = all_lows.size();
-      }
-      by_threshold.push_back(entry);
     }
-    by_times[variant.label] = by_threshold;
+    const int n = static_cast<int>(runs[c.name].size());
+    nlohmann::json entry = {{"slowdown_pct", c.slowdown_pct},
+                            {"one_point", c.one_point},
+                            {"runs", n},
+                            {"runs_failed", failed},
+                            {"run_rate", n ? static_cast<double>(failed) / n : 0.0},
+                            {"points", points},
+                            {"points_slower", points_slower},
+                            {"point_rate", points ? static_cast<double>(points_slower) / points : 0.0}};
+    if (c.one_point) entry.update({{"slowed_point_found", slowed_found}, {"other_points_found", others_found}});
+    summary[c.name] = entry;
   }
+  // From the A/A intervals: a slowdown s of one point is found (in the first pass) when low (1 + s)
+  // > 1 + t, so the slowdown found in 95% of runs is (1 + t) / q05(low) - 1, per point.
+  std::map<std::string, std::vector<double>> lows;
+  for (const auto& run : runs["a_a"])
+    for (const auto& p : run["points"])
+      if (p["low"].get<double>() > 0) lows[p["id"]].push_back(p["low"].get<double>());
+  std::vector<double> per_point;
+  nlohmann::json by_point = nlohmann::json::object();
+  for (const auto& [id, v] : lows) {
+    const double s = (1 + o.threshold_pct / 100) / quantile(v, 0.05) - 1;
+    by_point[id] = s;
+    per_point.push_back(s);
+  }
+  nlohmann::json derived = {{"smallest_slowdown_found_95pct_by_point", by_point},
+                            {"median_point", quantile(per_point, 0.5)},
+                            {"best_point", per_point.empty() ? 0.0 : *std::min_element(per_point.begin(), per_point.end())},
+                            {"worst_point", per_point.empty() ? 0.0 : *std::max_element(per_point.begin(), per_point.end())},
+                            {"how", "per point, (1 + threshold) / (5th percentile of its A/A interval lows) - 1: the "
+                                    "slowdown whose first-pass interval clears the threshold in 95% of runs"}};
 
-  nlohmann::json runs = nlohmann::json::object();
-  for (const auto& [name, list] : paths) runs[name] = list;
-  const nlohmann::json first = docs["a"].front();
   nlohmann::json doc = {{"sweep", o.sweep},
-                        {"runs_per_condition", o.runs},
-                        {"conditions", [&] {
-                           nlohmann::json c = nlohmann::json::array();
-                           for (const auto& x : conditions)
-                             c.push_back({{"name", x.name}, {"slowdown_pct", x.slowdown_pct}, {"half_threads", x.half_threads}});
-                           return c;
-                         }()},
-                        {"points_per_run", first["points"].size()},
-                        {"rule", {{"confidence", 0.95}, {"min_samples", 5}}},
-                        {"pairs",
-                         "a_a: ordered pairs of distinct A runs (K (K - 1)); slowdown: every A run against every slowed "
-                         "run (K^2); cross_machine: A against half-thread runs and back (2 K^2). Pairs share runs, so "
-                         "they are not independent trials"},
-                        {"sweeps_s", sweeps_s},
-                        {"reused_runs", o.reuse},  // true: runs from an earlier session, sweeps_s does not time them
-                        {"runs", runs},
-                        {"results", by_times}};
-  write_results(o.out, "bokehbench.selftest_compare", first["context"], doc);
+                        {"design", "paired: bokehbench ab between two builds of the same code (A/A), with a known "
+                                   "slowdown injected into the candidate's times (every point, or one point per run)"},
+                        {"threshold_pct", o.threshold_pct},
+                        {"baseline", base.baseline_exe},
+                        {"candidate", base.candidate_exe},
+                        {"points_per_run", ids.size()},
+                        {"seconds", seconds},
+                        {"summary", summary},
+                        {"derived_from_a_a", derived},
+                        {"runs", runs}};
+  write_results(o.out, "bokehbench.selftest_compare", run_context(nullptr), doc);
 
-  for (const Variant& variant : variants) {
-    const char* times = variant.label;
-    fmt::print("\n{} ({} runs per condition, {} points per run):\n", times, o.runs, first["points"].size());
-    fmt::print("{:>9}  {:>22}", "threshold", "A/A false alarms");
-    for (int pct : o.slowdowns_pct) fmt::print("  {:>22}", fmt::format("+{}% detected", pct));
-    if (o.cross_machine) fmt::print("  {:>22}", "cross-machine alarms");
-    fmt::print("  {:>12}\n", "95% detects");
-    for (const auto& e : by_times[times]) {
-      auto cell = [](const nlohmann::json& t) {
-        return fmt::format("{}/{} runs, {:.1f}% pts", t["pairs_flagged"].get<int>(), t["pairs"].get<int>(),
-                           100 * t["point_rate"].get<double>());
-      };
-      fmt::print("{:>8}%  {:>22}", e["threshold_pct"].get<double>(), cell(e["a_a"]));
-      for (int pct : o.slowdowns_pct) fmt::print("  {:>22}", cell(e[fmt::format("slowdown_{}pct", pct)]));
-      if (o.cross_machine) fmt::print("  {:>22}", cell(e["cross_machine"]));
-      fmt::print("  {:>11}\n", e.contains("smallest_slowdown_detected_95pct")
-                                    ? fmt::format("+{:.1f}%", 100 * e["smallest_slowdown_detected_95pct"].get<double>())
-                                    : std::string("-"));
-    }
+  fmt::print("\n{:<10} {:>6} {:>14} {:>16} {:>22}\n", "condition", "runs", "runs failed", "points slower",
+             "slowed point found");
+  for (const Condition& c : conditions) {
+    const auto& e = summary[c.name];
+    fmt::print("{:<10} {:>6} {:>14} {:>16} {:>22}\n", c.name, e["runs"].get<int>(),
+               fmt::format("{} ({:.0f}%)", e["runs_failed"].get<int>(), 100 * e["run_rate"].get<double>()),
+               fmt::format("{}/{}", e["points_slower"].get<int>(), e["points"].get<int>()),
+               c.one_point ? fmt::format("{}/{}", e["slowed_point_found"].get<int>(), e["runs"].get<int>()) : "-");
   }
-  fmt::print("\nwrote {} (sweeps took {:.0f} s)\n", o.out, sweeps_s);
+  fmt::print("one point's slowdown found in 95% of runs (from the A/A intervals): median point +{:.1f}%, best +{:.1f}%, "
+             "worst +{:.1f}%\nwrote {} ({:.0f} min)\n",
+             100 * derived["median_point"].get<double>(), 100 * derived["best_point"].get<double>(),
+             100 * derived["worst_point"].get<double>(), o.out, seconds / 60);
 }
 
 }  // namespace
@@ -257,22 +202,22 @@ void selftest(const SelftestOptions& o) {
 void add_selftest_compare_command(CLI::App& app) {
   auto o = std::make_shared<SelftestOptions>();
   auto* cmd = app.add_subcommand("selftest-compare",
-                                 "Measure `compare` on this machine: false alarms over A/A runs, detection of injected "
-                                 "slowdowns, and (--cross-machine) alarms against a half-thread 'other machine'");
-  cmd->add_option("--runs", o->runs, "Runs per condition")->check(CLI::Range(2, 100))->capture_default_str();
-  cmd->add_option("--slowdowns-pct", o->slowdowns_pct, "Injected slowdowns, percent (--inject-slowdown-pct)")
-      ->check(CLI::Range(1, 100))
+                                 "Measure CI's regression check (bokehbench ab) on this machine: false alarms over A/A "
+                                 "runs, detection of slowdowns injected into every point or one point");
+  cmd->add_option("--baseline", o->baseline, "Build folder (or bokehbench) of the baseline")->capture_default_str();
+  cmd->add_option("--candidate", o->candidate, "Build folder (or bokehbench) of the candidate")->capture_default_str();
+  cmd->add_option("--runs", o->runs, "A/A runs")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--injected-runs", o->injected_runs, "Runs of each injected condition")
+      ->check(CLI::Range(0, 1000))
       ->capture_default_str();
-  cmd->add_option("--thresholds-pct", o->thresholds_pct, "compare thresholds to evaluate, percent")
-      ->check(CLI::Range(0.0, 1000.0))
+  cmd->add_option("--slowdowns-pct", o->slowdowns_pct, "Injected slowdowns, percent")
+      ->check(CLI::Range(0.1, 1000.0))
       ->capture_default_str();
-  cmd->add_flag("--cross-machine", o->cross_machine,
-                "Also run as a slower 'other machine' (LP_NUM_THREADS and --cpu-threads at half the cores) and count "
-                "the alarms between the two");
-  cmd->add_option("--sweep", o->sweep, "The sweep command and its arguments, as CI runs it")->capture_default_str();
-  cmd->add_option("--work-dir", o->work_dir, "Where the runs' results go")->capture_default_str();
+  cmd->add_option("--threshold-pct", o->threshold_pct, "The threshold of the check (.ci/regression's)")
+      ->check(CLI::Range(0.1, 1000.0))
+      ->capture_default_str();
+  cmd->add_option("--sweep", o->sweep, "The sweep, as .ci/regression runs it")->capture_default_str();
   cmd->add_option("--out", o->out, "The summary JSON")->capture_default_str();
-  cmd->add_flag("--reuse", o->reuse, "Reuse runs already in --work-dir (to re-evaluate without measuring again)");
   cmd->callback([o] { selftest(*o); });
 }
 

@@ -68,6 +68,8 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
                   "Test of `compare` only: every sample runs this many percent more frames than it reports, a known "
                   "slowdown of every point (recorded in the results' config)")
       ->check(CLI::Range(0, 100));
+  // Internal: how `bokehbench ab` starts the two builds it compares (answers on stdin, not for people).
+  cmd->add_flag("--serve", serve, "Internal (bokehbench ab): time samples on request over stdin/stdout")->group("");
 }
 
 SweepSettings SweepFlags::settings(const std::string& name, const std::string& plot_script) const {
@@ -84,6 +86,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.policy.budget_s = budget_s;
   s.policy.seed = seed;
   s.policy.extra_work_fraction = inject_slowdown_pct / 100.0;
+  s.serve = serve;
   return s;
 }
 

@@ -34,6 +34,7 @@ struct SweepFlags {
   unsigned seed = 1;
   int inject_slowdown_pct = 0;  // a test of `compare` only (selftest-compare); 0: off
   bool plot = true;
+  bool serve = false;  // a worker of `bokehbench ab` (paired.hpp)
   void add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb = 0);
   SweepSettings settings(const std::string& name, const std::string& plot_script) const;
 };
@@ -61,6 +62,7 @@ void add_kernels_command(CLI::App& app);
 void add_tradeoff_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_selftest_compare_command(CLI::App& app);
+void add_ab_command(CLI::App& app);
 void add_stability_command(CLI::App& app);
 void add_adaptive_command(CLI::App& app);
 

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   bokeh::add_methods_command(app);
   bokeh::add_compare_command(app);
   bokeh::add_selftest_compare_command(app);
+  bokeh::add_ab_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -124,6 +124,19 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
 }
 
+// The verdict from j.interval: beyond the threshold either way, within it, or neither.
+void set_verdict(Judgement& j, const Rule& rule) {
+  const double up = 1 + rule.threshold, down = 1 / up;
+  if (j.interval.low > up)
+    j.verdict = Verdict::slower;
+  else if (j.interval.high < down)
+    j.verdict = Verdict::faster;
+  else if (j.interval.low >= down && j.interval.high <= up)
+    j.verdict = Verdict::same;
+  else
+    j.why = fmt::format("the interval reaches past {:+.0f}%", 100 * (j.interval.high > up ? rule.threshold : down - 1));
+}
+
 }  // namespace
 
 Judgement judge(const std::vector<double>& baseline, const std::vector<double>& current, const Rule& rule) {
@@ -147,15 +160,91 @@ Judgement judge(const std::vector<double>& baseline, const std::vector<double>& 
                         100 * rule.confidence);
     return j;
   }
-  const double up = 1 + rule.threshold, down = 1 / up;
-  if (j.interval.low > up)
-    j.verdict = Verdict::slower;
-  else if (j.interval.high < down)
-    j.verdict = Verdict::faster;
-  else if (j.interval.low >= down && j.interval.high <= up)
-    j.verdict = Verdict::same;
-  else
-    j.why = fmt::format("the interval reaches past {:+.0f}%", 100 * (j.interval.high > up ? rule.threshold : down - 1));
+  set_verdict(j, rule);
+  return j;
+}
+
+std::vector<double> signed_rank_counts(int n) {
+  if (n < 0) throw std::invalid_argument("signed_rank_counts: negative size");
+  // Subset sums of {1 .. n}, one element at a time (counts up to 2^n: exact in doubles to n = 53,
+  // relative error ~1e-16 beyond, far below what the tail sums need).
+  std::vector<double> c(static_cast<std::size_t>(n) * (n + 1) / 2 + 1, 0.0);
+  c[0] = 1;
+  for (int k = 1; k <= n; ++k)
+    for (std::size_t s = static_cast<std::size_t>(k) * (k + 1) / 2; s >= static_cast<std::size_t>(k); --s)
+      c[s] += c[s - static_cast<std::size_t>(k)];
+  return c;
+}
+
+int signed_rank_critical(int n, double confidence) {
+  if (!(confidence > 0 && confidence < 1)) throw std::invalid_argument("confidence must be in (0, 1)");
+  if (n < 1) return -1;
+  const double tail = (1 - confidence) / 2, total = std::ldexp(1.0, n);
+  const std::vector<double> counts = signed_rank_counts(n);
+  double cumulative = 0;
+  int critical = -1;
+  for (std::size_t t = 0; t < counts.size(); ++t) {
+    cumulative += counts[t];
+    if (cumulative / total > tail * (1 + 1e-12)) break;
+    critical = static_cast<int>(t);
+  }
+  return critical;
+}
+
+namespace {
+
+// The Walsh averages of the paired log-ratios, sorted.
+std::vector<double> walsh_averages(const std::vector<double>& baseline, const std::vector<double>& current) {
+  if (baseline.size() != current.size()) throw std::invalid_argument("paired samples of different lengths");
+  std::vector<double> d;
+  for (std::size_t r = 0; r < baseline.size(); ++r) d.push_back(std::log(current[r] / baseline[r]));
+  std::vector<double> w;
+  for (std::size_t i = 0; i < d.size(); ++i)
+    for (std::size_t j = i; j < d.size(); ++j) w.push_back(0.5 * (d[i] + d[j]));
+  std::sort(w.begin(), w.end());
+  return w;
+}
+
+}  // namespace
+
+RatioInterval paired_ratio_interval(const std::vector<double>& baseline, const std::vector<double>& current,
+                                    double confidence) {
+  RatioInterval out;
+  const int n = static_cast<int>(baseline.size());
+  const int c = signed_rank_critical(n, confidence);
+  if (c < 0) return out;
+  const std::vector<double> w = walsh_averages(baseline, current);
+  out.exists = true;
+  out.low = std::exp(w[static_cast<std::size_t>(c)]);
+  out.high = std::exp(w[w.size() - 1 - static_cast<std::size_t>(c)]);
+  const std::vector<double> counts = signed_rank_counts(n);
+  double tail = 0;
+  for (int t = 0; t <= c; ++t) tail += counts[static_cast<std::size_t>(t)];
+  out.coverage = 1 - 2 * tail / std::ldexp(1.0, n);
+  return out;
+}
+
+Judgement judge_paired(const std::vector<double>& baseline, const std::vector<double>& current, const Rule& rule) {
+  Judgement j;
+  if (baseline.size() != current.size()) throw std::invalid_argument("paired samples of different lengths");
+  const auto positive = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x) && x > 0; });
+  };
+  if (!positive(baseline) || !positive(current)) {
+    j.why = "a sample is not a positive time";
+    return j;
+  }
+  if (!baseline.empty()) j.ratio_of_medians = std::exp(median(walsh_averages(baseline, current)));
+  if (static_cast<int>(baseline.size()) < rule.min_samples) {
+    j.why = fmt::format("{} pairs, fewer than {}", baseline.size(), rule.min_samples);
+    return j;
+  }
+  j.interval = paired_ratio_interval(baseline, current, rule.confidence);
+  if (!j.interval.exists) {
+    j.why = fmt::format("too few pairs ({}) for a {:g}% interval", baseline.size(), 100 * rule.confidence);
+    return j;
+  }
+  set_verdict(j, rule);
   return j;
 }
 
@@ -323,7 +412,27 @@ std::string short_json(const json& v) {
   return text.size() > 60 ? text.substr(0, 57) + "..." : text;
 }
 
-// "a.b.c: old -> new" for every leaf that differs (the RFC 6902 patch of nlohmann::json::diff).
+std::string text_or(const json& obj, const char* key, const char* fallback = "?") {
+  if (obj.is_object() && obj.contains(key)) return obj[key].is_string() ? obj[key].get<std::string>() : obj[key].dump();
+  return fallback;
+}
+
+template <class Set>
+std::string listed(const Set& items, std::size_t most = 8) {
+  std::vector<std::string> shown;
+  for (const auto& x : items) {
+    if (shown.size() == most) {
+      shown.push_back(fmt::format("... ({} more)", items.size() - most));
+      break;
+    }
+    shown.push_back(x);
+  }
+  return fmt::format("{}", fmt::join(shown, ", "));
+}
+
+}  // namespace
+
+// The RFC 6902 patch of nlohmann::json::diff, one line a leaf.
 std::vector<std::string> json_differences(const json& baseline, const json& current) {
   std::vector<std::string> out;
   for (const auto& op : json::diff(baseline, current)) {
@@ -344,26 +453,6 @@ std::vector<std::string> json_differences(const json& baseline, const json& curr
   }
   return out;
 }
-
-std::string text_or(const json& obj, const char* key, const char* fallback = "?") {
-  if (obj.is_object() && obj.contains(key)) return obj[key].is_string() ? obj[key].get<std::string>() : obj[key].dump();
-  return fallback;
-}
-
-template <class Set>
-std::string listed(const Set& items, std::size_t most = 8) {
-  std::vector<std::string> shown;
-  for (const auto& x : items) {
-    if (shown.size() == most) {
-      shown.push_back(fmt::format("... ({} more)", items.size() - most));
-      break;
-    }
-    shown.push_back(x);
-  }
-  return fmt::format("{}", fmt::join(shown, ", "));
-}
-
-}  // namespace
 
 json load_results(const std::string& path) {
   std::ifstream in(path);
@@ -400,7 +489,7 @@ bool Report::work_changed() const {
 
 int Report::exit_code() const {
   if (!mismatches.empty()) return kNotComparable;
-  if (count(Verdict::slower) > 0) return kRegression;
+  if (count(Verdict::slower) > 0 && machine_differences.empty()) return kRegression;
   if (work_changed()) return kWorkChanged;
   return kNoRegression;
 }
@@ -433,22 +522,20 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
   const json& base_ctx = base.get(base.doc, "context", "", json::value_t::object);
   const json& cur_ctx = cur.get(cur.doc, "context", "", json::value_t::object);
   const json base_dev = base_ctx.value("device", json(nullptr)), cur_dev = cur_ctx.value("device", json(nullptr));
+  // The machine: timings from two machines (or devices) say more about the machines than about the
+  // code, so they are information, never a verdict (Report::machine_differences).
+  auto& machine = report.machine_differences;
   if (base_dev.is_null() != cur_dev.is_null()) {
-    report.mismatches.push_back(fmt::format("device: baseline {}, current {}", base_dev.is_null() ? "none" : text_or(base_dev, "name"),
-                                            cur_dev.is_null() ? "none" : text_or(cur_dev, "name")));
+    machine.push_back(fmt::format("device: baseline {}, current {}", base_dev.is_null() ? "none" : text_or(base_dev, "name"),
+                                  cur_dev.is_null() ? "none" : text_or(cur_dev, "name")));
   } else if (!base_dev.is_null()) {
-    for (const char* key : {"name", "type", "vendor_id", "device_id"})
+    for (const char* key : {"name", "type", "vendor_id", "device_id", "driver_info"})
       if (base_dev.value(key, json()) != cur_dev.value(key, json()))
-        report.mismatches.push_back(fmt::format("device {}: baseline {}, current {}", key, text_or(base_dev, key),
-                                                text_or(cur_dev, key)));
-    if (base_dev.value("driver_info", json()) != cur_dev.value("driver_info", json()))
-      report.notes.push_back(fmt::format("driver: baseline {}, current {}", text_or(base_dev, "driver_info"),
-                                         text_or(cur_dev, "driver_info")));
+        machine.push_back(fmt::format("device {}: baseline {}, current {}", key, text_or(base_dev, key), text_or(cur_dev, key)));
   }
   for (const char* key : {"cpu_model", "cpu_cores", "lp_num_threads"})
     if (base_ctx.value(key, json()) != cur_ctx.value(key, json()))
-      report.notes.push_back(fmt::format("{}: baseline {}, current {}{}", key, text_or(base_ctx, key), text_or(cur_ctx, key),
-                                         options.normalise == "none" ? " (raw times: expect a machine factor)" : ""));
+      machine.push_back(fmt::format("{}: baseline {}, current {}", key, text_or(base_ctx, key), text_or(cur_ctx, key)));
   report.notes.push_back(fmt::format("commits: baseline {} ({}), current {} ({})", text_or(base_ctx, "git_commit"),
                                      text_or(base_ctx, "date_utc"), text_or(cur_ctx, "git_commit"),
                                      text_or(cur_ctx, "date_utc")));
@@ -497,11 +584,6 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
     if (b.point && !c.point) report.mismatches.push_back(fmt::format("{}: measured in baseline, skipped in current ({})", id, c.skipped_reason));
     if (!b.point && c.point) report.mismatches.push_back(fmt::format("{}: skipped in baseline ({}), measured in current", id, b.skipped_reason));
   }
-  // Timings of two devices say nothing about the code: stop at the report of what differs.
-  if (std::any_of(report.mismatches.begin(), report.mismatches.end(),
-                  [](const std::string& m) { return m.rfind("device", 0) == 0; }))
-    return report;
-
   // The clock: CPU time where the device is the CPU and both files recorded it, else wall.
   if (options.times != "auto" && options.times != "wall" && options.times != "cpu")
     throw std::invalid_argument("--times is auto, wall or cpu, not '" + options.times + "'");
@@ -588,6 +670,8 @@ json report_json(const Report& r) {
                   {"median_ms", {{"baseline", p.baseline_median_ms}, {"current", p.current_median_ms}}},
                   {"work_changes", p.work_changes}};
     if (!j.why.empty()) entry["why"] = j.why;
+    if (!p.paired_baseline_ms.empty())
+      entry["paired_ms"] = {{"baseline", p.paired_baseline_ms}, {"current", p.paired_current_ms}};
     points.push_back(std::move(entry));
   }
   return {{"baseline", r.baseline_path},
@@ -599,9 +683,16 @@ json report_json(const Report& r) {
             {"normalise", r.options.normalise},
             {"times", r.options.times},
             {"clock", r.clock},
-            {"statistic", "ratio of medians current/baseline; interval: exact distribution-free (Mann-Whitney inversion "
-                          "on the pairwise ratios); slower/faster when the interval lies beyond the threshold, same "
-                          "when it lies within"}}},
+            {"statistic", r.design == "paired"
+                              ? "Hodges-Lehmann estimate of current/baseline over paired rounds; interval: exact "
+                                "distribution-free (Wilcoxon signed-rank inversion on the Walsh averages of the paired "
+                                "log-ratios); slower/faster when the interval lies beyond the threshold, same when it "
+                                "lies within"
+                              : "ratio of medians current/baseline; interval: exact distribution-free (Mann-Whitney "
+                                "inversion on the pairwise ratios); slower/faster when the interval lies beyond the "
+                                "threshold, same when it lies within"}}},
+          {"design", r.design},
+          {"machine_differences", r.machine_differences},
           {"mismatches", r.mismatches},
           {"notes", r.notes},
           {"counts",
@@ -619,11 +710,22 @@ std::string report_text(const Report& r) {
   const Rule& rule = r.options.rule;
   out += fmt::format("baseline: {}\ncurrent:  {}\n", r.baseline_path, r.current_path);
   for (const auto& n : r.notes) out += "  note: " + n + "\n";
+  if (!r.machine_differences.empty()) {
+    out += "DIFFERENT MACHINES: the verdicts below are information, not a regression check (exit 0 whatever they say);\n"
+           "compare two builds on one machine with `bokehbench ab` (or bench/ab COMMIT COMMIT)\n";
+    for (const auto& m : r.machine_differences) out += "  - " + m + "\n";
+  }
   if (!r.mismatches.empty()) {
     out += "NOT COMPARABLE:\n";
     for (const auto& m : r.mismatches) out += "  - " + m + "\n";
   }
-  if (!r.points.empty()) {
+  if (!r.points.empty() && r.design == "paired") {
+    out += fmt::format("\ncompared: {} time{} of the two builds, timed back to back in paired rounds (which goes first "
+                       "alternates); verdict from the {:g}% signed-rank interval of current/baseline against a {:g}% "
+                       "threshold (min {} pairs)\n",
+                       r.clock, r.clock == "cpu" ? " (process CPU time per frame; wall for a real GPU's passes)" : "",
+                       100 * rule.confidence, 100 * rule.threshold, rule.min_samples);
+  } else if (!r.points.empty()) {
     const std::string normalised =
         r.options.normalise == "none" ? std::string("raw")
         : r.options.normalise == "auto"
@@ -634,8 +736,10 @@ std::string report_text(const Report& r) {
                        "threshold (min {} samples a side)\n",
                        r.clock, r.clock == "cpu" ? " (process CPU time per frame)" : "", normalised,
                        100 * rule.confidence, 100 * rule.threshold, rule.min_samples);
+  }
+  if (!r.points.empty()) {
     out += fmt::format("{:<13} {:>7}  {:<17} {:>8} {:>8} {:>7}  {}\n", "verdict", "ratio", "interval", "raw wall",
-                       "raw cpu", "samples", "point");
+                       "raw cpu", r.design == "paired" ? "pairs" : "samples", "point");
     for (const auto& p : r.points) {
       const Judgement& j = p.judgement;
       const std::string interval = j.interval.exists ? fmt::format("[{:.3f}, {:.3f}]", j.interval.low, j.interval.high) : "-";
@@ -658,7 +762,12 @@ std::string report_text(const Report& r) {
                          r.count(Verdict::slower), 100 * rule.threshold);
       break;
     case kWorkChanged: out += "result: no timing regression, but the work counters changed: an algorithmic change (exit 4)\n"; break;
-    default: out += "result: no confident regression (exit 0)\n";
+    default:
+      if (!r.machine_differences.empty() && r.count(Verdict::slower) > 0)
+        out += fmt::format("result: {} point(s) slower on the other machine: information, not a regression (exit 0)\n",
+                           r.count(Verdict::slower));
+      else
+        out += "result: no confident regression (exit 0)\n";
   }
   return out;
 }

@@ -91,6 +91,28 @@ struct Judgement {
 
 Judgement judge(const std::vector<double>& baseline, const std::vector<double>& current, const Rule& rule);
 
+// ---- Paired samples (bokehbench ab: baseline and candidate timed back to back, round by round) ----
+//
+// Per pair r the log-ratio d_r = log(current_r / baseline_r); what the machine did during that
+// pair (its clock, a neighbour's burst, slow drift) is in both and cancels. The interval is the
+// exact distribution-free one for the centre of the d_r that inverts the Wilcoxon signed-rank test:
+// the Walsh averages (d_i + d_j) / 2, i <= j, from the (c+1)-th smallest to the (c+1)-th largest, c
+// the two-sided critical value of the signed-rank statistic (Hodges & Lehmann 1963). It assumes the
+// d_r are independent and symmetric about their centre, which alternating which side goes first
+// makes so; the estimate is the median of the Walsh averages. At 95% it exists from 6 pairs.
+
+// Number of subsets of {1 .. n} with sum s, for s = 0 .. n (n + 1) / 2 (the exact null distribution
+// of the signed-rank statistic, times 2^n).
+std::vector<double> signed_rank_counts(int n);
+// The largest c with P(T <= c) <= (1 - confidence) / 2 under the null, or -1 when n is too small.
+int signed_rank_critical(int n, double confidence);
+// Interval for s in current_r = s * baseline_r (same length, all values > 0).
+RatioInterval paired_ratio_interval(const std::vector<double>& baseline, const std::vector<double>& current,
+                                    double confidence);
+// The verdict from paired samples (Rule::min_samples: the fewest pairs); ratio_of_medians holds
+// the Hodges-Lehmann estimate exp(median of the Walsh averages).
+Judgement judge_paired(const std::vector<double>& baseline, const std::vector<double>& current, const Rule& rule);
+
 // ---- Two results files ----
 
 struct Options {
@@ -113,14 +135,22 @@ struct PointComparison {
   int baseline_samples = 0, current_samples = 0;
   double baseline_median_ms = 0, current_median_ms = 0;  // wall
   std::vector<std::string> work_changes;  // "passes.horizontal.taps: 1200 -> 1500"
+  // Paired design: the compared times pair by pair (taken back to back), for a second look.
+  std::vector<double> paired_baseline_ms, paired_current_ms;
 };
 
 struct Report {
+  // "files": two results files (compare); "paired": two builds timed back to back in one run (ab).
+  std::string design = "files";
   std::string baseline_path, current_path;
   Options options;
   std::string clock;  // the time compared: "wall" or "cpu"
   std::vector<std::string> mismatches;  // why the files are not comparable (as a whole)
   std::vector<std::string> notes;       // differences that do not stop the comparison
+  // The files come from different machines (device, CPU model, cores or LP_NUM_THREADS differ):
+  // their timings are shown as information, and no verdict sets the exit status (0 unless the files
+  // are not comparable at all). Two builds are compared on one machine with `bokehbench ab`.
+  std::vector<std::string> machine_differences;
   std::vector<PointComparison> points;  // the points both files measured
   int count(Verdict v) const;
   bool work_changed() const;
@@ -134,6 +164,9 @@ nlohmann::json load_results(const std::string& path);
 // one is malformed; differences that make them incomparable go to Report::mismatches instead.
 Report compare_results(const nlohmann::json& baseline, const nlohmann::json& current, const Options& options,
                        const std::string& baseline_path = "baseline", const std::string& current_path = "current");
+
+// "a.b.c: old -> new" for every leaf that differs between two JSON values (work counters).
+std::vector<std::string> json_differences(const nlohmann::json& baseline, const nlohmann::json& current);
 
 nlohmann::json report_json(const Report& report);
 std::string report_text(const Report& report);

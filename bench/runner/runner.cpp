@@ -104,6 +104,8 @@ int frames_for(double pilot_ms, const Policy& p) {
   return std::clamp(static_cast<int>(std::ceil(p.sample_min_ms / pilot_ms)), 1, p.max_frames_per_sample);
 }
 
+}  // namespace
+
 // Warms up: the target's own warm-up (JIT compilation), a pilot frame, then batches as long as a
 // sample until two in a row are no faster than the fastest so far by 3% (clocks ramping from
 // idle). Batches, not single frames: between single short frames a GPU waits on the host and
@@ -133,6 +135,8 @@ Sample timed(Target& target, int frames, int reported) {
   s.cpu_ms = (process_cpu_ms() - cpu_start) / reported;
   return s;
 }
+
+namespace {
 
 // Whole frames that make `extra_work_fraction` of `frames` (0 when off).
 int extra_frames(int frames, const Policy& p) {

@@ -103,6 +103,13 @@ struct Hooks {
   std::function<void(const Progress& progress, const PointRecord& visited)> progress;
 };
 
+// Warms `target` up as the rounds do (its own warm-up, a pilot frame, then batches as long as a
+// sample until two in a row are no faster), recording the batches in rec.warm_up_ms; returns the
+// last batch's frame time.
+double warm_up(Target& target, const Policy& policy, PointRecord& rec);
+// `frames` frames back to back, with the process CPU time they took per `reported` frame.
+Sample timed(Target& target, int frames, int reported);
+
 // names[i] is point i; skip[i], when not empty, keeps it out of the rounds with that reason.
 RunRecord run(const std::vector<std::string>& names, const std::vector<std::string>& skip, const Policy& policy,
               Hooks& hooks);

@@ -18,7 +18,9 @@
 #include "coc.hpp"
 #include "parallel.hpp"
 #include "report.hpp"
+#include "paired.hpp"
 #include "run.hpp"
+#include "targets.hpp"
 
 namespace bokeh {
 
@@ -148,68 +150,6 @@ std::vector<SweepPoint> expand(const Axes& axes) {
 
 namespace {
 
-// ---- Targets: a method on the GPU (timestamps) and as its CPU reference (wall clock). ----
-
-class GpuTarget final : public runner::Target {
- public:
-  GpuTarget(vk::Context& ctx, const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o)
-      : frame_(ctx, scene.color, scene.depth_m, lens, o.pattern), filter_(m.make_gpu(frame_, o)), timer_(ctx) {}
-  void warm_up() override { gpu::warm_up(frame_, *filter_, timer_); }
-  runner::Sample measure(int frames) override {
-    timer_.reserve(static_cast<std::uint32_t>(frames * passes_ + 2));
-    const auto passes = gpu::run_frames(frame_, *filter_, timer_, frames);
-    passes_ = static_cast<int>(passes.size());
-    runner::Sample s{vk::frame_ms(passes), {}};
-    for (const auto& p : passes) s.pass_ms[p.pass] = p.ms;
-    return s;
-  }
-  std::uint64_t resident_bytes() const override {
-    return 4ull * frame_.width() * frame_.height() * 16 + filter_->intermediate_bytes();
-  }
-  Image output() { return frame_.read_output(); }
-  // One frame with the per-pass counters on (outside the timed samples).
-  std::uint64_t intermediate_bytes() const { return filter_->intermediate_bytes(); }
-  std::vector<vk::PassTime> counted_frame() {
-    timer_.count_invocations(true);
-    auto passes = gpu::run_frames(frame_, *filter_, timer_, 1);
-    timer_.count_invocations(false);
-    return passes;
-  }
-  nlohmann::json stats() { return filter_->stats(); }
-
- private:
-  gpu::GpuFrame frame_;
-  std::unique_ptr<gpu::GpuFilter> filter_;
-  vk::TimestampQueries timer_;
-  int passes_ = 16;
-};
-
-class CpuTarget final : public runner::Target {
- public:
-  CpuTarget(const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o, int threads)
-      : method_(m), scene_(scene), lens_(lens), options_(o), threads_(threads) {}
-  void warm_up() override {
-    output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_, &stats_);
-  }
-  runner::Sample measure(int frames) override {
-    const auto start = std::chrono::steady_clock::now();
-    for (int f = 0; f < frames; ++f)
-      output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_, &stats_);
-    return {std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / frames, {}};
-  }
-  const Image& output() const { return output_; }
-  const nlohmann::json& stats() const { return stats_; }
-
- private:
-  const Method& method_;
-  const Scene& scene_;
-  Lens lens_;
-  FilterOptions options_;
-  int threads_;
-  Image output_;
-  nlohmann::json stats_ = nlohmann::json::object();
-};
-
 nlohmann::json distribution_json(const runner::Distribution& d) {
   return {{"median", d.median}, {"q1", d.q1}, {"q3", d.q3},         {"min", d.min},
           {"max", d.max},       {"mean", d.mean}, {"stddev", d.stddev}};
@@ -227,18 +167,6 @@ struct PointInfo {
   nlohmann::json counters = nlohmann::json::object();  // GPU: per pass, commands and shader invocations
   nlohmann::json stats = nlohmann::json::object();     // what the method found in the scene (GpuFilter::stats)
 };
-
-nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
-  nlohmann::json out = nlohmann::json::object();
-  double taps = 0;
-  for (const auto& p : passes) {
-    out["passes"][p.pass] = {{"taps", p.taps}, {"bytes_read", p.bytes_read}, {"bytes_written", p.bytes_written}};
-    taps += p.taps;
-  }
-  out["taps"] = taps;
-  out["taps_per_pixel"] = taps / pixels;
-  return out;
-}
 
 // What names a point: its axes' values.
 nlohmann::json identity_json(const SweepPoint& p) {
@@ -372,17 +300,13 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   check_writable_dir(s.out_dir);
   remove_stale_temporaries(s.out_dir);
   if (s.plot && !s.plot_script.empty()) check_writable_dir(s.plots_dir);
-  const int threads = s.cpu_threads > 0 ? s.cpu_threads : default_cpu_threads();
-  const bool any_gpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "gpu"; });
-  const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
-
-  std::optional<vk::Context> ctx;
-  if (any_gpu) {
-    vk::DeviceRequirements wanted;
-    for (const auto& p : points)
-      if (p.backend == "gpu") wanted.add(p.method->needs(p.options));
-    ctx.emplace(s.device, wanted);
+  if (s.serve) {  // a paired comparison's worker (bokehbench ab): it times samples on request
+    paired::serve(points, s);
+    return nlohmann::json::object();
   }
+  SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb);
+  vk::Context* ctx = targets.context();
+  const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
   nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
   runner::Policy policy = s.policy;
   // A GPU (not lavapipe) drops its clocks while the CPU references and other points run: each
@@ -390,38 +314,16 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   if (ctx && !ctx->info().is_software() && policy.lead_in_ms == 0) policy.lead_in_ms = policy.sample_min_ms / 4;
 
   // Plan: what cannot run is known before anything is allocated.
-  std::vector<std::string> names, skip(points.size());
+  std::vector<std::string> names, skip;
   std::vector<PointInfo> info(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const SweepPoint& p = points[i];
-    const Method& m = *p.method;
-    const int w = p.resolution.width_px, h = p.resolution.height_px;
-    names.push_back(p.id);
-    try {
-      check_options(m, p.options);
-      std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
-      for (auto& pass : m.work(p.options, w, h)) work.push_back(std::move(pass));
-      info[i].work = work_json(work, static_cast<double>(w) * h);
-      // Device features and limits, memory budget, host memory: known before anything is allocated.
-      FramePlan plan;
-      skip[i] = plan_frame(p.backend == "gpu" ? &*ctx : nullptr, m, p.options, w, h, s.max_buffer_mb, plan);
-      const MemoryUse& use = plan.intermediates;
-      if (plan.sized) info[i].memory = {{"bytes", use.bytes}, {"from_driver", use.from_driver}};
-      if (plan.sized && p.backend == "gpu") info[i].memory["details"] = use.details;
-    } catch (const std::exception& e) {
-      skip[i] = e.what();
-    }
+    names.push_back(points[i].id);
+    skip.push_back(targets.plans()[i].skip);
+    info[i].work = targets.plans()[i].work;
+    info[i].memory = targets.plans()[i].memory;
   }
 
-  // Scenes, lenses and references, made once and shared by the points that need them.
-  std::map<std::string, Scene> scenes;
-  auto scene_for = [&](const SweepPoint& p) -> const Scene& {
-    const std::string key = p.scene + "/" + p.resolution.text();
-    auto it = scenes.find(key);
-    if (it == scenes.end()) it = scenes.emplace(key, make_scene(p.scene, p.resolution.width_px, p.resolution.height_px)).first;
-    return it->second;
-  };
-  auto lens_for = [&](const SweepPoint& p) { return with_max_coc_radius(scene_for(p).lens, scene_for(p).depth_m, p.max_coc_px); };
+  // References, made once and shared by the points that need them.
   ExactReferenceCache cache(s.reference_cache);
   std::map<std::string, ExactReferences> exact;
   std::map<std::string, Image> extra;
@@ -429,8 +331,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   auto first_ready = [&](std::size_t i, const Image& output, const nlohmann::json& stats) {
     info[i].stats = stats;
     const SweepPoint& p = points[i];
-    const Scene& scene = scene_for(p);
-    const Lens lens = lens_for(p);
+    const Scene& scene = targets.scene(p);
+    const Lens lens = targets.lens(p);
     const float clamp = p.options.pattern.max_radius_px();
     const std::string key = fmt::format("{}/{}/{}/{}", p.scene, p.resolution.text(), p.max_coc_px, clamp);
     auto it = exact.find(key);
@@ -446,12 +348,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
 
   runner::Hooks hooks;
   hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
-    const SweepPoint& p = points[i];
-    const Scene& scene = scene_for(p);
-    const Lens lens = lens_for(p);
-    info[i].f_stop = lens.f_stop;
-    if (p.backend == "gpu") return std::make_unique<GpuTarget>(*ctx, *p.method, scene, lens, p.options);
-    return std::make_unique<CpuTarget>(*p.method, scene, lens, p.options, threads);
+    info[i].f_stop = targets.lens(points[i]).f_stop;
+    return targets.prepare(i);
   };
   hooks.first_ready = [&](std::size_t i, runner::Target& t) {
     if (auto* g = dynamic_cast<GpuTarget*>(&t)) {
@@ -469,7 +367,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   if (ctx)
     for (auto& k : gpu_calibration(*ctx)) calibration.push_back(std::move(k));
   if (any_cpu)
-    for (auto& k : cpu_calibration(threads)) calibration.push_back(std::move(k));
+    for (auto& k : cpu_calibration(targets.cpu_threads())) calibration.push_back(std::move(k));
   for (auto& k : calibration) hooks.probes.emplace_back(k.name, std::move(k.target));
 
   const std::filesystem::path out_dir(s.out_dir);

@@ -69,6 +69,8 @@ struct SweepSettings {
   double max_buffer_mb = 0;  // > 0: points whose intermediates exceed this many MiB are skipped unallocated
   int cpu_threads = 0;       // 0: every core
   bool plot = true;
+  // Answer a paired comparison's requests on stdin instead of running the rounds (paired.hpp).
+  bool serve = false;
   nlohmann::json config = nlohmann::json::object();  // the command's own settings, recorded as they are
   // A further reference for some points (e.g. full-resolution f32 FLAG for `buffers`): the point's
   // error gains vs_<field>; make() runs once per distinct key.

@@ -11,7 +11,8 @@ threads); the variants change one thing each:
   machine2x.json  every point AND every probe 2x slower: another machine, no regression once normalised
   contended.json  wall times 1.3-2.4x and noisy (other processes on the cores), CPU times unchanged
   work.json       one point's work counters changed, times the same: an algorithmic change
-  device.json     another device name
+  device.json     another device name (another machine: information, exit 0)
+  othercpu.json   slower.json's regression, measured on another CPU model (information, exit 0)
   schema1.json    schema_version 1
   points.json     one point missing
   skipped.json    one point skipped instead of measured
@@ -92,6 +93,9 @@ def main(out):
     device = document(6)
     device["context"]["device"]["name"] = "NVIDIA H200"
     files["device"] = device
+    othercpu = document(3, slow=(naive9, 1.5))
+    othercpu["context"]["cpu_model"] = "another CPU"
+    files["othercpu"] = othercpu
     old = document(7)
     old["schema_version"] = 1
     files["schema1"] = old

@@ -1,0 +1,105 @@
+// `bokehbench ab BASELINE CANDIDATE`: is the candidate build slower than the baseline build on this
+// machine? Both builds serve the same sweep as worker processes and are timed back to back, round
+// by round (bench/runner/paired.hpp); verdicts and exit codes are those of `compare`.
+// bench/ab does the same for two commits (it builds them first).
+#include <filesystem>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "commands.hpp"
+#include "compare.hpp"
+#include "paired.hpp"
+#include "report.hpp"
+
+namespace bokeh {
+
+namespace {
+
+struct AbOptions {
+  std::string baseline, candidate, sweep = "figure9 --quick", json_out;
+  double threshold_pct = 5;
+  paired::Options run;
+};
+
+// A bokehbench binary, or a build folder holding one.
+std::string executable(const std::string& given, const char* role) {
+  const std::filesystem::path p(given);
+  if (std::filesystem::is_directory(p)) {
+    const auto exe = p / "bokehbench";
+    if (!std::filesystem::exists(exe))
+      throw std::invalid_argument(fmt::format("{} '{}' is a folder without a bokehbench in it (build it first, or "
+                                              "use bench/ab, which builds commits)", role, given));
+    return std::filesystem::absolute(exe).string();
+  }
+  if (!std::filesystem::exists(p))
+    throw std::invalid_argument(fmt::format("{} '{}' is neither a build folder nor a bokehbench binary (for commits, "
+                                            "use bench/ab)", role, given));
+  return std::filesystem::absolute(p).string();
+}
+
+void run_ab(AbOptions& o) {
+  o.run.baseline_exe = executable(o.baseline, "baseline");
+  o.run.candidate_exe = executable(o.candidate, "candidate");
+  o.run.rule.threshold = o.threshold_pct / 100;
+  o.run.sweep.clear();
+  std::istringstream words(o.sweep);
+  for (std::string w; words >> w;) o.run.sweep.push_back(w);
+  if (o.run.sweep.empty()) throw std::invalid_argument("--sweep names no command");
+  const compare::Report report = paired::run(o.run);
+  fmt::print("\n{}", compare::report_text(report));
+  if (!o.json_out.empty()) {
+    write_results(o.json_out, "bokehbench.compare", run_context(nullptr), compare::report_json(report));
+    fmt::print("wrote {}\n", o.json_out);
+  }
+  if (report.exit_code() != compare::kNoRegression) throw ExitStatus{report.exit_code()};
+}
+
+}  // namespace
+
+void add_ab_command(CLI::App& app) {
+  auto o = std::make_shared<AbOptions>();
+  auto* cmd = app.add_subcommand(
+      "ab",
+      "Is CANDIDATE slower than BASELINE on this machine? Both builds run the same sweep, timed back to back in "
+      "paired rounds. Exit status as compare: 0 no confident regression, 1 error, 2 a point confidently slower by "
+      "more than the threshold, 3 nothing comparable, 4 work counters changed without a timing regression");
+  cmd->add_option("baseline", o->baseline, "Build folder (or bokehbench binary) of the baseline")->required();
+  cmd->add_option("candidate", o->candidate, "Build folder (or bokehbench binary) under test")->required();
+  cmd->add_option("--sweep", o->sweep, "The sweep both builds serve: a command and its axis flags")->capture_default_str();
+  cmd->add_option("--threshold-pct", o->threshold_pct,
+                  "Smallest change that counts, in percent: slower only when the whole interval lies above it")
+      ->check(CLI::Range(0.1, 1000.0))
+      ->capture_default_str();
+  cmd->add_option("--confidence", o->run.rule.confidence, "Confidence of each point's interval")
+      ->check(CLI::Range(0.5, 0.9999))
+      ->capture_default_str();
+  cmd->add_option("--min-pairs", o->run.rule.min_samples, "Pairs every point gets (fewer: inconclusive)")
+      ->check(CLI::Range(2, 10000))
+      ->capture_default_str();
+  cmd->add_option("--max-pairs", o->run.max_pairs, "Pairs after which a point stops even if its interval is wide")
+      ->check(CLI::Range(2, 10000))
+      ->capture_default_str();
+  cmd->add_option("--budget-s", o->run.budget_s, "Measuring time to aim for (every point still gets --min-pairs)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--sample-ms", o->run.sample_min_ms, "Each sample runs frames enough to last this long")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--seed", o->run.seed, "Seed of the visiting order")->capture_default_str();
+  cmd->add_option("--times", o->run.times,
+                  "auto: process CPU time per frame for lavapipe and the CPU references, timestamps on a GPU; "
+                  "wall; cpu")
+      ->check(CLI::IsMember({"auto", "wall", "cpu"}))
+      ->capture_default_str();
+  cmd->add_flag("!--no-confirm", o->run.confirm,
+                "Do not measure flagged points again with fresh processes (one process's memory layout can slow a point)");
+  cmd->add_option("--json", o->json_out, "Also write the comparison as JSON here (schema compare, design paired)");
+  cmd->add_option("--inject-slowdown-pct", o->run.inject_slowdown_pct,
+                  "Test of ab itself only: multiply the candidate's times by 1 + this / 100")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--inject-point", o->run.inject_points, "With --inject-slowdown-pct: only these points (ids)");
+  cmd->callback([o] { run_ab(*o); });
+}
+
+}  // namespace bokeh

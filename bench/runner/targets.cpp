@@ -1,0 +1,111 @@
+#include "targets.hpp"
+
+#include <chrono>
+
+#include "coc.hpp"
+#include "parallel.hpp"
+#include "run.hpp"
+
+namespace bokeh {
+
+GpuTarget::GpuTarget(vk::Context& ctx, const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o)
+    : frame_(ctx, scene.color, scene.depth_m, lens, o.pattern), filter_(m.make_gpu(frame_, o)), timer_(ctx) {}
+
+void GpuTarget::warm_up() { gpu::warm_up(frame_, *filter_, timer_); }
+
+runner::Sample GpuTarget::measure(int frames) {
+  timer_.reserve(static_cast<std::uint32_t>(frames * passes_ + 2));
+  const auto passes = gpu::run_frames(frame_, *filter_, timer_, frames);
+  passes_ = static_cast<int>(passes.size());
+  runner::Sample s{vk::frame_ms(passes), {}};
+  for (const auto& p : passes) s.pass_ms[p.pass] = p.ms;
+  return s;
+}
+
+std::uint64_t GpuTarget::resident_bytes() const {
+  return 4ull * frame_.width() * frame_.height() * 16 + filter_->intermediate_bytes();
+}
+
+std::vector<vk::PassTime> GpuTarget::counted_frame() {
+  timer_.count_invocations(true);
+  auto passes = gpu::run_frames(frame_, *filter_, timer_, 1);
+  timer_.count_invocations(false);
+  return passes;
+}
+
+CpuTarget::CpuTarget(const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o, int threads)
+    : method_(m), scene_(scene), lens_(lens), options_(o), threads_(threads) {}
+
+void CpuTarget::warm_up() { output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_, &stats_); }
+
+runner::Sample CpuTarget::measure(int frames) {
+  const auto start = std::chrono::steady_clock::now();
+  for (int f = 0; f < frames; ++f)
+    output_ = run_cpu(method_, scene_.color, scene_.depth_m, lens_, options_, threads_, &stats_);
+  return {std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / frames, {}};
+}
+
+namespace {
+
+nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
+  nlohmann::json out = nlohmann::json::object();
+  double taps = 0;
+  for (const auto& p : passes) {
+    out["passes"][p.pass] = {{"taps", p.taps}, {"bytes_read", p.bytes_read}, {"bytes_written", p.bytes_written}};
+    taps += p.taps;
+  }
+  out["taps"] = taps;
+  out["taps_per_pixel"] = taps / pixels;
+  return out;
+}
+
+}  // namespace
+
+SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::string& device, int cpu_threads,
+                           double max_buffer_mb)
+    : points_(points), threads_(cpu_threads > 0 ? cpu_threads : default_cpu_threads()), plans_(points.size()) {
+  vk::DeviceRequirements wanted;
+  bool any_gpu = false;
+  for (const auto& p : points)
+    if (p.backend == "gpu") wanted.add(p.method->needs(p.options)), any_gpu = true;
+  if (any_gpu) ctx_.emplace(device, wanted);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const SweepPoint& p = points[i];
+    const Method& m = *p.method;
+    const int w = p.resolution.width_px, h = p.resolution.height_px;
+    try {
+      check_options(m, p.options);
+      std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
+      for (auto& pass : m.work(p.options, w, h)) work.push_back(std::move(pass));
+      plans_[i].work = work_json(work, static_cast<double>(w) * h);
+      // Device features and limits, memory budget, host memory: known before anything is allocated.
+      FramePlan plan;
+      plans_[i].skip = plan_frame(p.backend == "gpu" ? context() : nullptr, m, p.options, w, h, max_buffer_mb, plan);
+      const MemoryUse& use = plan.intermediates;
+      if (plan.sized) plans_[i].memory = {{"bytes", use.bytes}, {"from_driver", use.from_driver}};
+      if (plan.sized && p.backend == "gpu") plans_[i].memory["details"] = use.details;
+    } catch (const std::exception& e) {
+      plans_[i].skip = e.what();
+    }
+  }
+}
+
+const Scene& SweepTargets::scene(const SweepPoint& p) {
+  const std::string key = p.scene + "/" + p.resolution.text();
+  auto it = scenes_.find(key);
+  if (it == scenes_.end()) it = scenes_.emplace(key, make_scene(p.scene, p.resolution.width_px, p.resolution.height_px)).first;
+  return it->second;
+}
+
+Lens SweepTargets::lens(const SweepPoint& p) {
+  const Scene& s = scene(p);
+  return with_max_coc_radius(s.lens, s.depth_m, p.max_coc_px);
+}
+
+std::unique_ptr<runner::Target> SweepTargets::prepare(std::size_t i) {
+  const SweepPoint& p = points_.at(i);
+  if (p.backend == "gpu") return std::make_unique<GpuTarget>(*ctx_, *p.method, scene(p), lens(p), p.options);
+  return std::make_unique<CpuTarget>(*p.method, scene(p), lens(p), p.options, threads_);
+}
+
+}  // namespace bokeh
