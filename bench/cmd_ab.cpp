@@ -2,15 +2,11 @@
 // machine? Both builds serve the same sweep as worker processes and are timed back to back, round
 // by round (bench/runner/paired.hpp); verdicts and exit codes are those of `compare`.
 // bench/ab does the same for two commits (it builds them first).
-#include <filesystem>
-#include <sstream>
-
 #include <fmt/format.h>
 
 #include "commands.hpp"
 #include "compare.hpp"
 #include "paired.hpp"
-#include "report.hpp"
 
 namespace bokeh {
 
@@ -22,37 +18,14 @@ struct AbOptions {
   paired::Options run;
 };
 
-// A bokehbench binary, or a build folder holding one.
-std::string executable(const std::string& given, const char* role) {
-  const std::filesystem::path p(given);
-  if (std::filesystem::is_directory(p)) {
-    const auto exe = p / "bokehbench";
-    if (!std::filesystem::exists(exe))
-      throw std::invalid_argument(fmt::format("{} '{}' is a folder without a bokehbench in it (build it first, or "
-                                              "use bench/ab, which builds commits)", role, given));
-    return std::filesystem::absolute(exe).string();
-  }
-  if (!std::filesystem::exists(p))
-    throw std::invalid_argument(fmt::format("{} '{}' is neither a build folder nor a bokehbench binary (for commits, "
-                                            "use bench/ab)", role, given));
-  return std::filesystem::absolute(p).string();
-}
-
 void run_ab(AbOptions& o) {
-  o.run.baseline_exe = executable(o.baseline, "baseline");
-  o.run.candidate_exe = executable(o.candidate, "candidate");
+  o.run.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
+  o.run.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
   o.run.rule.threshold = o.threshold_pct / 100;
-  o.run.sweep.clear();
-  std::istringstream words(o.sweep);
-  for (std::string w; words >> w;) o.run.sweep.push_back(w);
-  if (o.run.sweep.empty()) throw std::invalid_argument("--sweep names no command");
+  o.run.sweep = paired::sweep_words(o.sweep);
   const compare::Report report = paired::run(o.run);
-  fmt::print("\n{}", compare::report_text(report));
-  if (!o.json_out.empty()) {
-    write_results(o.json_out, "bokehbench.compare", run_context(nullptr), compare::report_json(report));
-    fmt::print("wrote {}\n", o.json_out);
-  }
-  if (report.exit_code() != compare::kNoRegression) throw ExitStatus{report.exit_code()};
+  fmt::print("\n");
+  report_verdicts(report, o.json_out);
 }
 
 }  // namespace

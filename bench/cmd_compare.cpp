@@ -27,15 +27,19 @@ void run_compare(const CompareOptions& o) {
   options.times = o.times;
   const nlohmann::json baseline = compare::load_results(o.baseline), current = compare::load_results(o.current);
   const compare::Report report = compare::compare_results(baseline, current, options, o.baseline, o.current);
-  fmt::print("{}", compare::report_text(report));
-  if (!o.json_out.empty()) {
-    write_results(o.json_out, "bokehbench.compare", run_context(nullptr), compare::report_json(report));
-    fmt::print("wrote {}\n", o.json_out);
-  }
-  if (report.exit_code() != compare::kNoRegression) throw ExitStatus{report.exit_code()};
+  report_verdicts(report, o.json_out);
 }
 
 }  // namespace
+
+void report_verdicts(const compare::Report& report, const std::string& json_out) {
+  fmt::print("{}", compare::report_text(report));
+  if (!json_out.empty()) {
+    write_results(json_out, "bokehbench.compare", run_context(nullptr), compare::report_json(report));
+    fmt::print("wrote {}\n", json_out);
+  }
+  if (report.exit_code() != compare::kNoRegression) throw ExitStatus{report.exit_code()};
+}
 
 void add_compare_command(CLI::App& app) {
   auto o = std::make_shared<CompareOptions>();

@@ -11,9 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <map>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -22,6 +20,7 @@
 #include "compare.hpp"
 #include "paired.hpp"
 #include "report.hpp"
+#include "runner.hpp"
 
 namespace bokeh {
 
@@ -42,19 +41,6 @@ struct Condition {
   bool one_point = false;
 };
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const auto lo = static_cast<std::size_t>(pos);
-  const auto hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (v[hi] - v[lo]) * (pos - static_cast<double>(lo));
-}
-
-std::string executable(const std::string& build) {
-  return std::filesystem::is_directory(build) ? (std::filesystem::path(build) / "bokehbench").string() : build;
-}
-
 void selftest(const SelftestOptions& o) {
   std::vector<Condition> conditions = {{"a_a", 0, false}};
   for (double pct : o.slowdowns_pct) {
@@ -62,11 +48,9 @@ void selftest(const SelftestOptions& o) {
     conditions.push_back({fmt::format("one_{:g}", pct), pct, true});
   }
   paired::Options base;
-  base.baseline_exe = std::filesystem::absolute(executable(o.baseline)).string();
-  base.candidate_exe = std::filesystem::absolute(executable(o.candidate)).string();
-  std::istringstream words(o.sweep);
-  base.sweep.clear();
-  for (std::string w; words >> w;) base.sweep.push_back(w);
+  base.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
+  base.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
+  base.sweep = paired::sweep_words(o.sweep);
   base.rule.threshold = o.threshold_pct / 100;
   base.progress = false;
 
@@ -158,12 +142,12 @@ void selftest(const SelftestOptions& o) {
   std::vector<double> per_point;
   nlohmann::json by_point = nlohmann::json::object();
   for (const auto& [id, v] : lows) {
-    const double s = (1 + o.threshold_pct / 100) / quantile(v, 0.05) - 1;
+    const double s = (1 + o.threshold_pct / 100) / runner::quantile(v, 0.05) - 1;
     by_point[id] = s;
     per_point.push_back(s);
   }
   nlohmann::json derived = {{"smallest_slowdown_found_95pct_by_point", by_point},
-                            {"median_point", quantile(per_point, 0.5)},
+                            {"median_point", runner::quantile(per_point, 0.5)},
                             {"best_point", per_point.empty() ? 0.0 : *std::min_element(per_point.begin(), per_point.end())},
                             {"worst_point", per_point.empty() ? 0.0 : *std::max_element(per_point.begin(), per_point.end())},
                             {"how", "per point, (1 + threshold) / (5th percentile of its A/A interval lows) - 1: the "

@@ -11,6 +11,9 @@
 namespace bokeh {
 
 struct SweepSettings;
+namespace compare {
+struct Report;
+}
 
 // Every registered method's own options as flags of a command (--near-components, ...), kept as
 // given; values_for() parses them for the chosen methods.
@@ -48,6 +51,10 @@ std::vector<std::string> default_sweep_methods();
 struct ExitStatus {
   int code = 0;
 };
+
+// Prints a comparison's verdicts (and writes them as JSON when json_out is set); throws ExitStatus
+// with the report's exit code when it is not 0 (compare and ab).
+void report_verdicts(const compare::Report& report, const std::string& json_out);
 
 // True when the user gave `option` on the command line (so --quick must not override it).
 inline bool given(const CLI::Option* option) { return option->count() > 0; }

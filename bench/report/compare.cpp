@@ -42,6 +42,26 @@ std::vector<double> mann_whitney_counts(int m, int n) {
   return c;
 }
 
+namespace {
+
+// The largest c with P(statistic <= c) <= (1 - confidence) / 2 under the null whose counts (one per
+// value of the statistic, from 0) are given, or -1 when even the smallest value is more likely.
+int lower_critical(const std::vector<double>& counts, double confidence) {
+  double total = 0;
+  for (double v : counts) total += v;
+  const double tail = (1 - confidence) / 2;
+  double cumulative = 0;
+  int critical = -1;
+  for (std::size_t u = 0; u < counts.size(); ++u) {
+    cumulative += counts[u];
+    if (cumulative / total > tail * (1 + 1e-12)) break;
+    critical = static_cast<int>(u);
+  }
+  return critical;
+}
+
+}  // namespace
+
 int mann_whitney_critical_normal(int m, int n, double confidence) {
   // P(U <= c) ~ Phi((c + 0.5 - m n / 2) / sd), sd^2 = m n (m + n + 1) / 12.
   const double tail = (1 - confidence) / 2;
@@ -59,18 +79,7 @@ int mann_whitney_critical(int m, int n, double confidence) {
   if (!(confidence > 0 && confidence < 1)) throw std::invalid_argument("confidence must be in (0, 1)");
   if (m < 1 || n < 1) return -1;
   if (std::min(m, n) > kExactMaxSamples) return mann_whitney_critical_normal(m, n, confidence);
-  const double tail = (1 - confidence) / 2;
-  const std::vector<double> counts = mann_whitney_counts(m, n);
-  double total = 0;
-  for (double v : counts) total += v;
-  double cumulative = 0;
-  int critical = -1;
-  for (std::size_t u = 0; u < counts.size(); ++u) {
-    cumulative += counts[u];
-    if (cumulative / total > tail * (1 + 1e-12)) break;
-    critical = static_cast<int>(u);
-  }
-  return critical;
+  return lower_critical(mann_whitney_counts(m, n), confidence);
 }
 
 int min_samples_for_interval(double confidence) {
@@ -179,16 +188,7 @@ std::vector<double> signed_rank_counts(int n) {
 int signed_rank_critical(int n, double confidence) {
   if (!(confidence > 0 && confidence < 1)) throw std::invalid_argument("confidence must be in (0, 1)");
   if (n < 1) return -1;
-  const double tail = (1 - confidence) / 2, total = std::ldexp(1.0, n);
-  const std::vector<double> counts = signed_rank_counts(n);
-  double cumulative = 0;
-  int critical = -1;
-  for (std::size_t t = 0; t < counts.size(); ++t) {
-    cumulative += counts[t];
-    if (cumulative / total > tail * (1 + 1e-12)) break;
-    critical = static_cast<int>(t);
-  }
-  return critical;
+  return lower_critical(signed_rank_counts(n), confidence);
 }
 
 namespace {
@@ -756,7 +756,9 @@ std::string report_text(const Report& r) {
                      r.count(Verdict::inconclusive),
                      std::count_if(r.points.begin(), r.points.end(), [](const auto& p) { return !p.work_changes.empty(); }));
   switch (r.exit_code()) {
-    case kNotComparable: out += "result: the files are not comparable (exit 3)\n"; break;
+    case kNotComparable:
+      out += fmt::format("result: the {} are not comparable (exit 3)\n", r.design == "paired" ? "builds" : "files");
+      break;
     case kRegression:
       out += fmt::format("result: REGRESSION: {} point(s) confidently slower by more than {:g}% (exit 2)\n",
                          r.count(Verdict::slower), 100 * rule.threshold);

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <list>
 #include <map>
 #include <memory>
@@ -121,6 +122,28 @@ void serve(const std::vector<SweepPoint>& points, const SweepSettings& s) {
 }
 
 // ---- The coordinator ----
+
+std::string bokehbench_in(const std::string& given, const std::string& role) {
+  const std::filesystem::path p(given);
+  if (std::filesystem::is_directory(p)) {
+    if (!std::filesystem::exists(p / "bokehbench"))
+      throw std::invalid_argument(fmt::format("{} '{}' is a folder without a bokehbench in it (build it first, or use "
+                                              "bench/ab, which builds commits)", role, given));
+    return std::filesystem::absolute(p / "bokehbench").string();
+  }
+  if (!std::filesystem::exists(p))
+    throw std::invalid_argument(fmt::format("{} '{}' is neither a build folder nor a bokehbench binary (for commits, "
+                                            "use bench/ab)", role, given));
+  return std::filesystem::absolute(p).string();
+}
+
+std::vector<std::string> sweep_words(const std::string& command_line) {
+  std::istringstream in(command_line);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  if (words.empty()) throw std::invalid_argument("--sweep names no command");
+  return words;
+}
 
 namespace {
 

@@ -51,6 +51,12 @@ struct Options {
   bool progress = true;
 };
 
+// The bokehbench to run for `given`: a build folder holding one, or a binary (absolute path). Throws
+// std::invalid_argument naming `role` and what is wrong.
+std::string bokehbench_in(const std::string& given, const std::string& role);
+// A sweep command line ("figure9 --quick") as the words a worker is started with.
+std::vector<std::string> sweep_words(const std::string& command_line);
+
 // Runs both workers and returns the comparison (Report::design "paired"). Throws
 // std::runtime_error when a worker cannot be started or stops answering (naming it).
 compare::Report run(const Options& options);

@@ -295,15 +295,15 @@ nlohmann::json methods_json(const std::vector<SweepPoint>& points) {
 }  // namespace
 
 nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSettings& s) {
+  if (s.serve) {  // a paired comparison's worker (bokehbench ab): it times samples on request, writes nothing
+    paired::serve(points, s);
+    return nlohmann::json::object();
+  }
   const auto wall_start = std::chrono::steady_clock::now();
   // Where the results go is checked before anything is measured.
   check_writable_dir(s.out_dir);
   remove_stale_temporaries(s.out_dir);
   if (s.plot && !s.plot_script.empty()) check_writable_dir(s.plots_dir);
-  if (s.serve) {  // a paired comparison's worker (bokehbench ab): it times samples on request
-    paired::serve(points, s);
-    return nlohmann::json::object();
-  }
   SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb);
   vk::Context* ctx = targets.context();
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
