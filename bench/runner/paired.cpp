@@ -67,11 +67,13 @@ void serve(const std::vector<SweepPoint>& points, const SweepSettings& s) {
   std::map<std::size_t, std::unique_ptr<runner::Target>> live;
   std::map<std::size_t, double> last_frame_ms;
   std::list<std::size_t> recency;  // least recent first
-  const auto target = [&](std::size_t i) -> runner::Target& {
+  // The point's target, made ready when it is not live (first use, or freed to save memory): `warm`
+  // warms it up itself; a sample of a target made again warms it first (compile caches are warm by then).
+  const auto target = [&](std::size_t i, bool warm_if_made) -> runner::Target& {
     auto it = live.find(i);
     if (it == live.end()) {
       it = live.emplace(i, targets.prepare(i)).first;
-      it->second->warm_up();  // JIT compilation and first-touch, also when made again after being freed
+      if (warm_if_made) it->second->warm_up();
     }
     recency.remove(i);
     recency.push_back(i);
@@ -95,7 +97,7 @@ void serve(const std::vector<SweepPoint>& points, const SweepSettings& s) {
       i = request.at("point").get<std::size_t>();
       if (i >= points.size()) throw std::out_of_range(fmt::format("no point {}", i));
       if (!targets.plans()[i].skip.empty()) throw std::runtime_error(targets.plans()[i].skip);
-      runner::Target& t = target(i);
+      runner::Target& t = target(i, op != "warm");
       if (op == "warm") {
         runner::PointRecord record;
         last_frame_ms[i] = runner::warm_up(t, s.policy, record);
@@ -232,16 +234,6 @@ class Worker {
   pid_t pid_ = -1;
   int to_ = -1, from_ = -1;
 };
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t h = v.size() / 2;
-  return v.empty() ? 0 : v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
-
-std::string duration_text(double s) {
-  return s < 90 ? fmt::format("{:.0f} s", s) : fmt::format("{}m{:02d}s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
-}
 
 // A point both builds measure.
 struct Pairing {
@@ -510,8 +502,8 @@ compare::Report run(const Options& o) {
     pc.raw_cpu_ratio = estimate(p.cpu_ms);
     pc.baseline_samples = static_cast<int>(p.wall_ms[0].size());
     pc.current_samples = static_cast<int>(p.wall_ms[1].size());
-    pc.baseline_median_ms = median(p.wall_ms[0]);
-    pc.current_median_ms = median(p.wall_ms[1]);
+    pc.baseline_median_ms = runner::quantile(p.wall_ms[0], 0.5);
+    pc.current_median_ms = runner::quantile(p.wall_ms[1], 0.5);
     pc.work_changes = compare::json_differences(p.work[0], p.work[1]);
     pc.paired_baseline_ms = p.compared(0);
     pc.paired_current_ms = p.compared(1);

@@ -57,6 +57,11 @@ GatherPattern parse_pattern(const std::string& text) {
   return p;
 }
 
+std::string duration_text(double s) {
+  if (s < 90) return fmt::format("{:.0f} s", s);
+  return fmt::format("{}m{:02d}s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+}
+
 namespace {
 
 template <class T>
@@ -155,10 +160,6 @@ nlohmann::json distribution_json(const runner::Distribution& d) {
           {"max", d.max},       {"mean", d.mean}, {"stddev", d.stddev}};
 }
 
-std::string duration_text(double s) {
-  if (s < 90) return fmt::format("{:.0f} s", s);
-  return fmt::format("{}m{:02d}s", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
-}
 
 // What one point knows beyond its samples.
 struct PointInfo {

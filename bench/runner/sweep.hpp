@@ -25,6 +25,9 @@ Resolution parse_resolution(const std::string& text);
 // "NxK", a valid gather pattern; throws std::invalid_argument naming the text.
 GatherPattern parse_pattern(const std::string& text);
 
+// "42 s", or "3m05s" from 90 s on: durations and ETAs in progress lines.
+std::string duration_text(double seconds);
+
 // A sweep's axes: the product of all of them, less what a method does not accept.
 struct Axes {
   std::vector<std::string> methods;
