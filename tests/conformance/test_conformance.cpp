@@ -2,7 +2,8 @@
 // defaults and with every other choice of each enumerated option (one option at a time: a GPU
 // block shape, adaptive = on), checked against what the method itself declares (method.hpp). A new
 // method or option is covered without editing this file.
-//   GPU vs CPU reference: max |GPU - CPU| <= gpu_tolerance x the reference's largest value.
+//   GPU vs CPU reference: max |GPU - CPU| <= gpu_tolerance x the reference's largest value, and the
+//   passes the GPU stamps are the ones the work model names.
 //   Radius 0 (a pinhole lens) is the identity, up to storage_tolerance x the largest value.
 //   Energy: at a constant radius with a black border wider than any kernel, the output's total equals
 //   the input's (methods that declare they conserve it), up to storage_tolerance x the largest value
@@ -85,7 +86,13 @@ TEST_P(Conformance, GpuMatchesCpuReferenceWithinTheStatedBound) {
   // 1.2x: some pixels clamp at the largest radius, the rest spread below it.
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2);
   const Image cpu = run_cpu(*c.method, s.color, s.depth_m, lens, c.options, 2);
-  const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options);
+  std::vector<vk::PassTime> passes;
+  const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options, &passes);
+  // The work model names the passes the GPU driver stamps, in the same order (CoC first).
+  std::vector<std::string> timed, modelled = {"coc"};
+  for (const auto& p : passes) timed.push_back(p.pass);
+  for (const auto& w : c.method->work(c.options, s.color.width, s.color.height)) modelled.push_back(w.pass);
+  EXPECT_EQ(timed, modelled);
   ASSERT_TRUE(gpu.same_shape(cpu));
   for (float v : gpu.pixels) ASSERT_TRUE(std::isfinite(v));
   const double error = max_abs_diff(gpu, cpu) / max_abs(cpu);
@@ -182,20 +189,6 @@ TEST(Registry, EveryMethodDeclaresItsModels) {
     const auto work = m.work(o, 64, 48);
     ASSERT_FALSE(work.empty());
     for (const auto& pass : work) EXPECT_GT(pass.taps + pass.bytes_read + pass.bytes_written, 0) << pass.pass;
-  }
-}
-
-// The work model names the passes the GPU driver stamps, in the same order (CoC first).
-TEST(Registry, WorkModelNamesTheTimedPasses) {
-  const Scene s = make_scene("hoops", 32, 24);
-  for (const Config& c : all_configs()) {
-    if (!context().unmet(c.method->needs(c.options)).empty()) continue;
-    std::vector<vk::PassTime> passes;
-    run_gpu(context(), *c.method, s.color, s.depth_m, s.lens, c.options, &passes);
-    std::vector<std::string> timed, modelled = {"coc"};
-    for (const auto& p : passes) timed.push_back(p.pass);
-    for (const auto& w : c.method->work(c.options, 32, 24)) modelled.push_back(w.pass);
-    EXPECT_EQ(timed, modelled) << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale;
   }
 }
 
