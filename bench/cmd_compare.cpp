@@ -48,7 +48,7 @@ void add_compare_command(CLI::App& app) {
       "Compare two sweep results files point by point. Exit status: 0 no confident regression, 1 error (unreadable or "
       "malformed file; bad arguments: CLI11's codes from 100), 2 a point confidently slower by more than the threshold, 3 files not comparable (schema, "
       "device, methods or points differ), 4 work counters changed (algorithmic change) without a timing regression");
-  cmd->add_option("baseline", o->baseline, "Results file to compare against (e.g. results/baseline/figure9.json)")
+  cmd->add_option("baseline", o->baseline, "Results file to compare against (a figure9 --json or sweep JSON file)")
       ->required();
   cmd->add_option("current", o->current, "Results file of the run under test")->required();
   cmd->add_option("--threshold-pct", o->threshold_pct,

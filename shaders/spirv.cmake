@@ -1,6 +1,6 @@
 # GLSL -> SPIR-V at build time. Every variant becomes a header `<folder>_<name>.spv.h` defining
 # `const uint32_t <folder>_<name>_spv[]`; one generated library holds them all, looked up by
-# "<folder>/<name>" (bench/vk/spirv.hpp), so the binary runs from any directory.
+# "<folder>/<name>" (kernels/vk/spirv.hpp), so the binary runs from any directory.
 set(BOKEH_SHADER_DIR ${CMAKE_CURRENT_LIST_DIR})
 set(BOKEH_SPIRV_DIR ${PROJECT_BINARY_DIR}/spirv)
 file(MAKE_DIRECTORY ${BOKEH_SPIRV_DIR})

@@ -1,6 +1,6 @@
 #pragma once
 // Accuracy next to every timing: a result's error against the exact scatter references of the
-// same scene, lens and resolution (kernels/exact_scatter.hpp, cached on disk).
+// same scene, lens and resolution (kernels/core/exact_scatter.hpp, cached on disk).
 #include <nlohmann/json.hpp>
 
 #include "exact_scatter.hpp"

@@ -209,7 +209,7 @@ Method circular_method(int components) {
   // so the bound sums over the buckets (the larger field's); the composite divides the sum by its
   // alpha, about 1 inside a field, which at most doubles it (numerator and denominator both off):
   // 1e-5 + 2 sum_k storage_k. Where a field's coverage is small (an isolated pixel, down to 1e-4) the
-  // division amplifies more, as it does for off; tests/methods/test_gpu_circular.cpp measures both.
+  // division amplifies more, as it does for off; tests/kernels/circular/test_gpu_circular.cpp measures both.
   // Measured on lavapipe: <= 3e-7 of the largest value at every precision (it rounds like the CPU).
   auto storage = [components](const FilterOptions& o, double units) {
     const IntermediatePrecision p = intermediate_precision_from_string(o.precision);

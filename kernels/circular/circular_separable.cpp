@@ -54,7 +54,7 @@ struct Intermediate {
 // a block of adjacent values of a row (x * channels + ch) sits in SIMD registers while the taps run
 // (horizontal: all taps of one row; vertical: the taps of 4 output rows, so every intermediate row
 // loaded serves 4 outputs). Borders clamp through a padded copy of the row (horizontal) or clamped
-// row pointers (vertical). tests/methods/test_circular.cpp checks the bits against plain loops.
+// row pointers (vertical). tests/kernels/circular/test_circular.cpp checks the bits against plain loops.
 
 // Float vectors of one SIMD register (GCC/Clang vector extension: 4 floats with SSE, 8 when the
 // build enables AVX, e.g. -march=native): element-wise IEEE operations, so a sum over vectors keeps

@@ -41,7 +41,7 @@ Image coc_radius_image(const Image& depth_m, const Lens& lens, float max_radius_
   Image radius(depth_m.width, depth_m.height, 1);
   for (std::size_t i = 0; i < depth_m.pixels.size(); ++i) {
     const float d = depth_m.pixels[i];
-    // Same float expression as shaders/coc.comp, so both sides clamp the same radii.
+    // Same float expression as shaders/common/coc.comp, so both sides clamp the same radii.
     radius.pixels[i] = std::min(scale * std::abs(d - focus) / d, max_radius_px);
   }
   return radius;

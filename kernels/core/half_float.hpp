@@ -3,7 +3,7 @@
 // that rounds to nearest), for the CPU references' f16 storage. With F16C it converts eight values
 // per instruction: compiled in where the compiler targets F16C (-march=native on such a CPU, CMake
 // option BOKEH_NATIVE), else chosen at run time on x86-64 CPUs that have it; Imath's software
-// conversion otherwise. Every path gives the same bits (tests/core/test_half_float.cpp).
+// conversion otherwise. Every path gives the same bits (tests/kernels/flag/test_flag_buffers.cpp).
 #include <cstddef>
 #include <string>
 

@@ -6,14 +6,14 @@
 // each loaded row sample serves them all, with the same layers bit for bit; horizontal_bins picks how
 // a sample lands in its layer's bin (indexed or masked, flag_gpu.hpp), again with the same layers.
 //
-// Layer precisions (LayerPrecision, kernels/flag.hpp): one image format and one shader pair each.
+// Layer precisions (LayerPrecision, kernels/flag/flag.hpp): one image format and one shader pair each.
 // The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
 // without the 3D-buffer writes, reducing each (row, layer, channel) to its min and max with
-// atomicMin/atomicMax on the float bits (shaders/flag_bracket.comp) into a small storage buffer
+// atomicMin/atomicMax on the float bits (shaders/flag/bracket.comp) into a small storage buffer
 // (2 x rows x layers uvec4, reset by vkCmdFillBuffer in the same pass); the horizontal pass
 // stores (v - min) / (max - min) in the unorm format and the vertical pass reads min + (max - min) q.
 //
-// FilterOptions::buffer_scale s > 1 (kernels/flag_reduced.hpp): "downsample" packs the full-res
+// FilterOptions::buffer_scale s > 1 (kernels/flag/flag_reduced.hpp): "downsample" packs the full-res
 // colour and CoC into a ceil(W/s) x ceil(H/s) FLAG input for the low-res pattern, FLAG runs there
 // into a ceil(L/s)-layer buffer, and "upsample" adds the bilinear low-res result to the sharp part of
 // each full-res pixel. Passes, each timed: downsample (s > 1), bracket (bracketed), horizontal,

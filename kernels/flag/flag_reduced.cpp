@@ -33,7 +33,7 @@ Image flag_downsample(const Image& color, const Image& radius_px, const GatherPa
   Image packed(w, h, 4);
   for (int ly = 0; ly < h; ++ly)
     for (int lx = 0; lx < w; ++lx) {
-      // Same order and float operations as shaders/flag_downsample.comp.
+      // Same order and float operations as shaders/flag/downsample.comp.
       float sum[3] = {0, 0, 0}, weight = 0, weighted_radius = 0;
       int count = 0;
       for (int y = ly * scale; y < std::min(color.height, ly * scale + scale); ++y)
@@ -63,7 +63,7 @@ Image flag_upsample(const Image& blurred_low, const Image& color, const Image& r
   const float inv_scale = 1.0f / static_cast<float>(scale);  // exact for 1, 2, 4
   for (int y = 0; y < color.height; ++y)
     for (int x = 0; x < color.width; ++x) {
-      // Same float operations as shaders/flag_upsample.comp.
+      // Same float operations as shaders/flag/upsample.comp.
       const float u = (static_cast<float>(x) + 0.5f) * inv_scale - 0.5f;
       const float v = (static_cast<float>(y) + 0.5f) * inv_scale - 0.5f;
       const float fu = std::floor(u), fv = std::floor(v);

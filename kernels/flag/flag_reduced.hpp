@@ -1,7 +1,7 @@
 #pragma once
 // FLAG with a reduced-resolution 3D buffer (the paper's section 5: "Half resolution or quarter
 // resolution 3D buffers could be used"), at 1/s (s = 2 half, 4 quarter), in four passes. The GPU
-// version (bench/gpu/flag_gpu.cpp, shaders/flag_downsample.comp, flag_upsample.comp) mirrors this
+// version (kernels/flag/flag_gpu.cpp, shaders/flag/downsample.comp, upsample.comp) mirrors this
 // pass for pass, in the same float arithmetic.
 //
 // Pattern. The full-res pattern has L = ceil(N/2) layers at spacing k. The low-res one has

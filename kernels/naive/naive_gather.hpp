@@ -9,7 +9,7 @@ namespace bokeh {
 
 // packed: RGBA = (rgb / discrete disc area, radius px), from pack_gather_input. Returns RGB.
 // Vectorised across eight adjacent pixels; each pixel adds its samples in the order of
-// naive_gather_reference, so both give the same image bit for bit (tests/methods/test_gather.cpp).
+// naive_gather_reference, so both give the same image bit for bit (tests/kernels/flag/test_flag_cpu.cpp).
 // tiles (adaptive mode): the tile-max CoC map of `packed` (coc_tiles.hpp); each eight pixels then
 // visit only the samples inside the largest disc D of their tiles, which holds every sample that adds
 // anything to them: the same image, bit for bit.

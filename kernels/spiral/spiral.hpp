@@ -28,7 +28,7 @@
 // filter is a normalised convolution and conserves energy away from the borders; where samples stop
 // contributing (a blurred foreground over a sharp background) the running average weights a sample
 // found after i others by 1 / (i + 2) rather than 1 / (samples + 1), so light near a blurred
-// foreground object's centre is over-weighted (tests/methods/test_spiral.cpp measures both).
+// foreground object's centre is over-weighted (tests/kernels/spiral/test_spiral.cpp measures both).
 #include <cstdint>
 #include <vector>
 

@@ -7,7 +7,7 @@ layout(push_constant) uniform Params {
   int height_px;
   int half_n;         // (N - 1) / 2
   int spacing_px;     // k
-  float coc_scale_px; // r = coc_scale_px * |D - P| / D, see kernels/lens.hpp
+  float coc_scale_px; // r = coc_scale_px * |D - P| / D, see kernels/core/lens.hpp
   float focus_m;
   float max_radius_px;
 } params;

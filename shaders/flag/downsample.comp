@@ -1,8 +1,8 @@
 #version 450
-// Reduced-resolution FLAG, pass 1 (kernels/flag_reduced.hpp): each low-res pixel packs its s x s block
+// Reduced-resolution FLAG, pass 1 (kernels/flag/flag_reduced.hpp): each low-res pixel packs its s x s block
 // of the full-res frame as FLAG input for the low-res pattern: colour sum_i w_i c_i / n, radius the
 // w-weighted mean / s, with w = clamp(2 r / s - 1, 0, 1). Push constants: the LOW-RES Params.
-// Same order of float operations as flag_downsample() in kernels/flag_reduced.cpp.
+// Same order of float operations as flag_downsample() in kernels/flag/flag_reduced.cpp.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 

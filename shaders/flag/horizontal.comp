@@ -4,7 +4,7 @@
 // OUTPUTS (layers.glsl) pixels per invocation at stride k share each loaded row sample; every pixel
 // still adds its samples in the same order, so the layers are bit for bit those of OUTPUTS = 1.
 // BRACKETED=1: store (v - offset) / scale of the row's bracket (flag_bracket.comp) into a unorm
-// format; the vertical pass undoes it. See LayerPrecision in kernels/flag.hpp.
+// format; the vertical pass undoes it. See LayerPrecision in kernels/flag/flag.hpp.
 // ADAPTIVE=1 (method option adaptive = on): the tile-max CoC map (tiles.glsl) bounds the row samples
 // by the largest disc index D that reaches the subgroup's pixels (uniform), and each pixel writes
 // only the layers up to its tile's Z, the highest any vertical pass reads there (none: no store).

@@ -1,7 +1,7 @@
 #version 450
-// Reduced-resolution FLAG, pass 4 (kernels/flag_reduced.hpp): out = (1 - w(r)) colour + bilinear of
+// Reduced-resolution FLAG, pass 4 (kernels/flag/flag_reduced.hpp): out = (1 - w(r)) colour + bilinear of
 // the low-res FLAG output at ((x + 0.5) / s - 0.5, (y + 0.5) / s - 0.5), edges clamped. Push
-// constants: the FULL-RES Params. Same float operations as flag_upsample() in kernels/flag_reduced.cpp.
+// constants: the FULL-RES Params. Same float operations as flag_upsample() in kernels/flag/flag_reduced.cpp.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 

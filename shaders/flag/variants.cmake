@@ -1,4 +1,4 @@
-# FLAG's 3D-buffer precisions, as kernels/flag/flag_precision.cpp names them: name, GLSL image
+# FLAG's 3D-buffer precisions, as kernels/flag/flag.cpp names them: name, GLSL image
 # format, bracketed. One horizontal and one vertical pass per precision, worst case and adaptive
 # (method option adaptive = on: bounded by the tile-max CoC map, shaders/common/tiles.glsl).
 foreach(entry IN ITEMS f32:rgba32f:0 f16:rgba16f:0 r11g11b10f:r11f_g11f_b10f:0 unorm10_bracketed:rgb10_a2:1

@@ -13,7 +13,7 @@
 //   step   = 0 (f32) | 2^-10 sum|G| M + 2^-24 (f16) | S M / 1023 + |O| 2^-10 TAPS M (bracketed10: one
 //            code of I' / M, plus one half ulp of the box sum sum(J) / M <= TAPS),
 // and the vertical pass turns it into an error E of each blurred channel (propagate_storage_error(), as in
-// tests/test_circular.cpp) plus its own f32 noise, TAPS u kappa M with kappa = sum_c (|wr| + |wi|)
+// tests/kernels/circular/test_circular.cpp) plus its own f32 noise, TAPS u kappa M with kappa = sum_c (|wr| + |wi|)
 // (sum|F|)^2. The composite is then propagated per pixel from the CPU's blurred values: far
 // (1 - a) s + a c / b.a with error a (E + |c / b.a| E) / (b.a - E), or, where b.a is within E of the
 // 1e-4 threshold, the full jump a (|s| + (|c| + E) / 1e-4); near (1 - alpha) o + c alpha / b.a likewise,
@@ -355,7 +355,7 @@ TEST(GpuCircularDisc, PointLightAtConstantCocMakesDiscOfRequestedRadius) {
       for (int y = 0; y < size; ++y)
         for (int x = 0; x < size; ++x) total += out.px(x, y)[0];
       EXPECT_NEAR(total, 1.0, 1e-4) << n << " components: the disc keeps the light's energy";
-      // As on the CPU (tests/test_circular.cpp): the profile crosses 1/2 within 0.3% past the edge;
+      // As on the CPU (tests/kernels/circular/test_circular.cpp): the profile crosses 1/2 within 0.3% past the edge;
       // the plateau estimate and the linear interpolation add a few hundredths of a pixel.
       const double measured = half_plateau_radius(out, 0, c, c, disc);
       EXPECT_NEAR(measured, disc, 0.005 * disc + 0.05) << n << " components, disc " << disc << " px";

@@ -257,7 +257,7 @@ TEST(Sprites, CloserToTheExactScatterThanNaiveOnPointLights) {
 }
 
 // lavapipe stamps time late once a draw has bound a framebuffer unless the timing path forces a
-// flush (bench/vk/timestamps.cpp): each pass then reads as the next one, so after a sprites frame a
+// flush (kernels/vk/timestamps.cpp): each pass then reads as the next one, so after a sprites frame a
 // naive frame's CoC pass took the gather's time and the gather next to none. The gather does N^2 =
 // 1681 taps a pixel where the CoC pass does 41 columns: shifted stamps invert that order.
 TEST(Sprites, TimestampsStayWithTheirPassesAfterADraw) {
