@@ -24,16 +24,11 @@ namespace {
 constexpr const char* kOption = "adaptive";  // the option's key, the same in every method that has it
 
 struct AdaptiveOptions {
-  std::vector<std::string> scenes = {"mostly_in_focus", "half_defocused", "fully_defocused"};
+  AxisFlags axes;
   std::vector<double> max_coc_px = {12, 40};
-  std::string pattern = "41x2";
-  int width_px = 800, height_px = 600;
-  std::vector<std::string> methods;
   SweepFlags sweep;
   MethodOptionFlags method_options;
-  bool quick = false;
-  CLI::Option *width_opt = nullptr, *height_opt = nullptr, *coc_opt = nullptr, *pattern_opt = nullptr,
-              *budget_opt = nullptr;
+  CLI::Option* coc_opt = nullptr;
 };
 
 // Every registered method that declares the adaptive option as an enumeration with "off" and "on".
@@ -128,31 +123,27 @@ std::string mib_text(double bytes) {
 }
 
 void adaptive(AdaptiveOptions& o) {
-  if (o.quick) {
-    if (!given(o.width_opt)) o.width_px = 160;
-    if (!given(o.height_opt)) o.height_px = 120;
-    if (!given(o.pattern_opt)) o.pattern = "9x2";
-    if (!given(o.coc_opt)) o.max_coc_px = {4};
-    if (!given(o.budget_opt)) o.sweep.budget_s = 8;
-  }
+  o.axes.resolve(&o.sweep);
+  if (o.axes.quick && !given(o.coc_opt)) o.max_coc_px = {4};
+  std::vector<std::string>& methods = o.axes.methods;
   const std::vector<std::string> candidates = adaptive_methods();
-  if (o.methods.empty())
+  if (methods.empty())
     for (const auto& name : candidates)
-      if (find_method(name).in_default_sweeps) o.methods.push_back(name);
-  for (const auto& name : o.methods) {
+      if (find_method(name).in_default_sweeps) methods.push_back(name);
+  for (const auto& name : methods) {
     find_method(name);  // unknown names: the registry's message
     if (std::find(candidates.begin(), candidates.end(), name) == candidates.end())
       throw std::invalid_argument(fmt::format("method '{}' has no option '{}' (methods with one: {})", name, kOption,
                                               fmt::join(candidates, ", ")));
   }
-  if (o.methods.empty()) throw std::invalid_argument("no registered method declares the option 'adaptive'");
+  if (methods.empty()) throw std::invalid_argument("no registered method declares the option 'adaptive'");
   Axes axes;
-  axes.methods = o.methods;
+  axes.methods = methods;
   axes.backends = {"gpu"};
-  axes.scenes = o.scenes;
-  axes.resolutions = {{o.width_px, o.height_px}};
-  axes.patterns = {parse_pattern(o.pattern)};
-  axes.option_values = o.method_options.values_for(o.methods);
+  axes.scenes = o.axes.scenes;
+  axes.resolutions = o.axes.frame_sizes();
+  axes.patterns = o.axes.patterns();
+  axes.option_values = o.method_options.values_for(methods);
   if (axes.option_values.count(kOption))
     throw std::invalid_argument("--adaptive: this command measures every method both ways; leave it out");
   axes.sweep_choices = {kOption};
@@ -164,14 +155,14 @@ void adaptive(AdaptiveOptions& o) {
   }
 
   SweepSettings s = o.sweep.settings("adaptive", "plot_adaptive.py");
-  s.config = {{"scenes", o.scenes},
+  s.config = {{"scenes", axes.scenes},
               {"max_coc_px", o.max_coc_px},
-              {"pattern", o.pattern},
-              {"width_px", o.width_px},
-              {"height_px", o.height_px},
-              {"methods", o.methods},
+              {"pattern", fmt::format("{}x{}", axes.patterns.front().size_n, axes.patterns.front().spacing_px)},
+              {"width_px", axes.resolutions.front().width_px},
+              {"height_px", axes.resolutions.front().height_px},
+              {"methods", methods},
               {"backend", "gpu"},
-              {"quick", o.quick},
+              {"quick", o.axes.quick},
               {"worst_case", "adaptive = off: every method sized for the pattern's largest radius"},
               {"speedup", "median frame time off / on (frames include the CoC pass and, on, the tile-map passes)"},
               {"memory", "memory.allocated_bytes: what the filter allocated once prepared for the scene"},
@@ -205,18 +196,18 @@ void add_adaptive_command(CLI::App& app) {
   auto o = std::make_shared<AdaptiveOptions>();
   auto* cmd = app.add_subcommand(
       "adaptive", "Worst-case vs adaptive (model only what the scene requires): speed-up, memory, error per scene");
-  cmd->add_option("--scenes", o->scenes, "Procedural scenes")->check(CLI::IsMember(procedural_scene_names()));
+  AxisFlags& a = o->axes;
+  a.scenes = {"mostly_in_focus", "half_defocused", "fully_defocused"};
+  a.sizes = {"41x2"};  // the pattern the filters are provisioned for
+  a.resolutions = {"800x600"};
+  a.add_to(cmd, {Axis::scenes, Axis::methods}, {Axis::sizes, Axis::resolutions});
   o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px,
                                "The scenes' largest CoC radius in px, each measured at every value (sets the f-stop; "
                                "below the pattern's largest radius, the worst case provisions more than needed)");
-  o->pattern_opt = cmd->add_option("--pattern", o->pattern, "Gather pattern NxK the filters are provisioned for");
-  o->width_opt = cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
-  o->height_opt = cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
-  cmd->add_option("--methods", o->methods, "Methods (default: every method in the default sweeps with an 'adaptive' option)");
   o->method_options.add_to(cmd);
   o->sweep.add_to(cmd, 240);
-  o->budget_opt = cmd->get_option("--budget-s");
-  cmd->add_flag("--quick", o->quick, "Small run for CI and tests (160x120, pattern 9x2, max CoC 4 px, 8 s)");
+  a.add_quick(cmd, "Small run for CI and tests (160x120, pattern 9x2, max CoC 4 px, 8 s)",
+              {{Axis::resolutions, {"160x120"}}, {Axis::sizes, {"9x2"}}}, 8);
   cmd->callback([o] { adaptive(*o); });
 }
 

@@ -23,49 +23,37 @@ namespace bokeh {
 namespace {
 
 struct BuffersOptions {
-  std::vector<std::string> resolutions = {"800x600", "1280x720", "1920x1080", "3840x2160"};
-  std::vector<int> sizes = {21, 41};
-  int spacing_px = 2;
-  std::vector<std::string> precisions;  // default: every precision FLAG has
-  std::vector<int> scales;              // default: every scale FLAG has
+  AxisFlags axes;
   std::vector<double> budget_lines_mib = {64, 16};
-  std::string scene = "hoops";
   SweepFlags sweep;
-  bool quick = false;
-  CLI::Option *resolutions_opt = nullptr, *sizes_opt = nullptr, *budget_opt = nullptr;
 };
 
 double allocated_mib(const nlohmann::json& point) { return point["memory"]["bytes"].get<double>() / (1024.0 * 1024.0); }
 
 void buffers(BuffersOptions& o) {
-  if (o.quick) {
-    if (!given(o.resolutions_opt)) o.resolutions = {"160x120"};
-    if (!given(o.sizes_opt)) o.sizes = {9, 13};
-    if (!given(o.budget_opt)) o.sweep.budget_s = 12;
-  }
+  o.axes.resolve(&o.sweep);
   const Method& flag = find_method("flag");
   Axes axes;
   axes.methods = {flag.name};
-  axes.scenes = {o.scene};
-  axes.resolutions.clear();
-  for (const auto& r : o.resolutions) axes.resolutions.push_back(parse_resolution(r));
-  for (int n : o.sizes) {
-    axes.patterns.push_back({n, o.spacing_px});
-    validate(axes.patterns.back());
-  }
-  for (const auto& p : o.precisions) layer_precision_from_string(p);
-  axes.precisions = o.precisions.empty() ? std::vector<std::string>{"all"} : o.precisions;
-  for (int s : o.scales)
+  axes.scenes = o.axes.scenes;
+  axes.resolutions = o.axes.frame_sizes();
+  axes.patterns = o.axes.patterns();
+  for (const auto& p : o.axes.precisions) layer_precision_from_string(p);
+  axes.precisions = o.axes.precisions.empty() ? std::vector<std::string>{"all"} : o.axes.precisions;
+  for (int s : o.axes.scales)
     if (std::find(flag.buffer_scales.begin(), flag.buffer_scales.end(), s) == flag.buffer_scales.end())
       throw std::invalid_argument(fmt::format("--scales: FLAG has no buffer scale {} (it has {})", s,
                                               fmt::join(flag.buffer_scales, ", ")));
-  axes.scales = o.scales.empty() ? std::vector<int>{0} : o.scales;
+  axes.scales = o.axes.scales.empty() ? std::vector<int>{0} : o.axes.scales;
+  std::vector<int> sizes;
+  for (const auto& p : axes.patterns) sizes.push_back(p.size_n);
 
   SweepSettings s = o.sweep.settings("buffers", "plot_buffers.py");
-  s.config = {{"scene", o.scene},
-              {"resolutions", o.resolutions},
-              {"sizes", o.sizes},
-              {"spacing_px", o.spacing_px},
+  s.config = {{"scene", axes.scenes.front()},
+              {"resolutions", o.axes.resolutions},
+              {"sizes", sizes},
+              {"patterns", o.axes.sizes},
+              {"spacing_px", o.axes.spacing_px},
               {"max_buffer_mb", o.sweep.max_buffer_mb},
               {"budget_lines_mib", o.budget_lines_mib},
               {"scene_coc", "lens f-stop set per N so the scene's largest CoC radius equals k (N - 1) / 2"},
@@ -79,7 +67,7 @@ void buffers(BuffersOptions& o) {
   s.extra_reference = [threads](const SweepPoint& p, const Scene& scene,
                                 const Lens& lens) -> std::optional<SweepSettings::ExtraReference> {
     return SweepSettings::ExtraReference{
-        "flag_f32", fmt::format("{}/{}", p.resolution.text(), p.options.pattern.size_n), [&scene, lens, p, threads] {
+        "flag_f32", fmt::format("{}/{}x{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px), [&scene, lens, p, threads] {
           const CocInput coc = cpu_coc_pass(scene.color, scene.depth_m, lens, p.options.pattern);
           return flag_blur_in_strips(coc.packed, p.options.pattern, LayerPrecision::f32, 256,
                                      threads > 0 ? threads : default_cpu_threads());
@@ -121,17 +109,16 @@ void add_buffers_command(CLI::App& app) {
   auto o = std::make_shared<BuffersOptions>();
   auto* cmd = app.add_subcommand(
       "buffers", "FLAG 3D buffer at reduced precision and resolution: memory, GPU time and error side by side");
-  o->resolutions_opt = cmd->add_option("--resolutions", o->resolutions, "Frame sizes WIDTHxHEIGHT");
-  o->sizes_opt = cmd->add_option("--sizes", o->sizes, "Gather sizes N (odd)");
-  cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px");
-  cmd->add_option("--precisions", o->precisions, "3D-buffer precisions (default: all FLAG has)");
-  cmd->add_option("--scales", o->scales, "Buffer scales (default: all FLAG has: 1 full, 2 half, 4 quarter)");
+  AxisFlags& a = o->axes;
+  a.resolutions = {"800x600", "1280x720", "1920x1080", "3840x2160"};
+  a.sizes = {"21", "41"};
+  a.scenes = {"hoops"};  // precisions and scales: every one FLAG has
+  a.add_to(cmd, {Axis::resolutions, Axis::sizes, Axis::precisions, Axis::scales}, {Axis::scenes});
   cmd->add_option("--budget-lines", o->budget_lines_mib, "Memory budgets (MiB) to report and draw")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember(procedural_scene_names()));
   o->sweep.add_to(cmd, 240, 512);
-  o->budget_opt = cmd->get_option("--budget-s");
-  cmd->add_flag("--quick", o->quick, "Small sweep for CI and tests (160x120, N = 9 and 13)");
+  a.add_quick(cmd, "Small sweep for CI and tests (160x120, N = 9 and 13)",
+              {{Axis::resolutions, {"160x120"}}, {Axis::sizes, {"9", "13"}}}, 12);
   cmd->callback([o] { buffers(*o); });
 }
 

@@ -15,15 +15,9 @@ namespace bokeh {
 namespace {
 
 struct Figure9Options {
-  std::vector<int> sizes = {5, 9, 13, 17, 21, 25, 29, 33, 37, 41};
-  int spacing_px = 2, width_px = 800, height_px = 600;
-  std::string scene = "hoops";
-  std::vector<std::string> methods, precisions;
-  std::vector<std::string> backends = {"gpu", "cpu"};
+  AxisFlags axes;
   SweepFlags sweep;
   MethodOptionFlags method_options;
-  bool quick = false;
-  CLI::Option *sizes_opt = nullptr, *width_opt = nullptr, *height_opt = nullptr, *budget_opt = nullptr;
 };
 
 nlohmann::json fit_json(const PowerLawFit& f) {
@@ -83,35 +77,30 @@ nlohmann::json ratios_json(const nlohmann::json& points) {
 }
 
 void figure9(Figure9Options& o) {
-  if (o.quick) {  // a small sweep for CI; whatever was given explicitly stays
-    if (!given(o.sizes_opt)) o.sizes = {5, 9, 13};
-    if (!given(o.width_opt)) o.width_px = 200;
-    if (!given(o.height_opt)) o.height_px = 150;
-    if (!given(o.budget_opt)) o.sweep.budget_s = 20;
-  }
-  if (o.methods.empty()) o.methods = default_sweep_methods();
+  o.axes.resolve(&o.sweep);
+  if (o.axes.methods.empty()) o.axes.methods = default_sweep_methods();
   Axes axes;
-  axes.methods = o.methods;
-  axes.backends = o.backends;
-  axes.scenes = {o.scene};
-  axes.resolutions = {{o.width_px, o.height_px}};
-  for (int n : o.sizes) {
-    axes.patterns.push_back({n, o.spacing_px});
-    validate(axes.patterns.back());
-  }
-  axes.precisions = o.precisions;
-  axes.option_values = o.method_options.values_for(o.methods);
+  axes.methods = o.axes.methods;
+  axes.backends = o.axes.backends;
+  axes.scenes = o.axes.scenes;
+  axes.resolutions = o.axes.frame_sizes();
+  axes.patterns = o.axes.patterns();
+  axes.precisions = o.axes.precisions;
+  axes.option_values = o.method_options.values_for(axes.methods);
+  std::vector<int> sizes;
+  for (const auto& p : axes.patterns) sizes.push_back(p.size_n);
 
   SweepSettings s = o.sweep.settings("figure9", "plot_figure9.py");
-  s.config = {{"scene", o.scene},
-              {"width_px", o.width_px},
-              {"height_px", o.height_px},
-              {"spacing_px", o.spacing_px},
-              {"sizes", o.sizes},
-              {"methods", o.methods},
-              {"backends", o.backends},
-              {"precisions", o.precisions},
-              {"quick", o.quick},
+  s.config = {{"scene", axes.scenes.front()},
+              {"width_px", axes.resolutions.front().width_px},
+              {"height_px", axes.resolutions.front().height_px},
+              {"spacing_px", o.axes.spacing_px},
+              {"sizes", sizes},
+              {"patterns", o.axes.sizes},
+              {"methods", axes.methods},
+              {"backends", axes.backends},
+              {"precisions", axes.precisions},
+              {"quick", o.axes.quick},
               {"scene_coc", "lens f-stop set per N so the scene's largest CoC radius equals the pattern's max radius"},
               {"error", "each point's output against the exact scatter references (energy_sum: the plain sum naive and "
                         "FLAG approximate; depth_ordered: composited front to back) of the same scene and CoC"}};
@@ -142,19 +131,16 @@ void figure9(Figure9Options& o) {
 void add_figure9_command(CLI::App& app) {
   auto o = std::make_shared<Figure9Options>();
   auto* cmd = app.add_subcommand("figure9", "Reproduce FLAG paper Figure 9: frame time vs gather size");
-  o->sizes_opt = cmd->add_option("--sizes", o->sizes, "Gather sizes N (odd)");
-  cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px (the paper uses 2)");
-  o->width_opt = cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
-  o->height_opt = cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
-  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember(procedural_scene_names()));
-  cmd->add_option("--methods", o->methods, "Methods to sweep (default: every method in default sweeps)");
-  cmd->add_option("--backends", o->backends, "gpu and/or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
-  cmd->add_option("--precision", o->precisions,
-                  "Intermediate storage for the methods that accept it (default: each method's, FLAG: f16 as the paper)");
+  AxisFlags& a = o->axes;
+  a.sizes = {"5", "9", "13", "17", "21", "25", "29", "33", "37", "41"};  // at k = 2, as the paper
+  a.resolutions = {"800x600"};
+  a.scenes = {"hoops"};
+  a.backends = {"gpu", "cpu"};
+  a.add_to(cmd, {Axis::sizes, Axis::methods, Axis::backends, Axis::precisions}, {Axis::resolutions, Axis::scenes});
   o->method_options.add_to(cmd);
   o->sweep.add_to(cmd, 300);
-  o->budget_opt = cmd->get_option("--budget-s");
-  cmd->add_flag("--quick", o->quick, "Small sweep for CI and tests (200x150, N = 5, 9, 13, 20 s)");
+  a.add_quick(cmd, "Small sweep for CI and tests (200x150, N = 5, 9, 13, 20 s)",
+              {{Axis::sizes, {"5", "9", "13"}}, {Axis::resolutions, {"200x150"}}}, 20);
   cmd->callback([o] { figure9(*o); });
 }
 

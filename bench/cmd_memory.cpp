@@ -6,6 +6,7 @@
 #include "flag_gpu.hpp"
 #include "method.hpp"
 #include "report.hpp"
+#include "sweep.hpp"
 #include "vk/memory.hpp"
 
 namespace bokeh {
@@ -13,9 +14,8 @@ namespace bokeh {
 namespace {
 
 struct MemoryOptions {
-  int width_px = 1920, height_px = 1080, size_n = 41;
-  std::vector<std::string> precisions = {"f16", "f32"};
-  std::vector<int> scales;  // default: every scale FLAG has
+  AxisFlags axes;
+  int width_px = 0, height_px = 0, size_n = 0;  // from axes (memory() sets them)
   std::string device, out_path = "results/memory.json";
 };
 
@@ -25,7 +25,11 @@ double paper_printed_mb(const MemoryOptions& o, LayerPrecision precision, int sc
   return scale == 1 ? 332.0 : scale == 2 ? 42.0 : 5.2;
 }
 
-void memory(const MemoryOptions& o) {
+void memory(MemoryOptions& o) {
+  o.axes.resolve();
+  const Resolution frame = o.axes.frame_sizes().front();
+  o.width_px = frame.width_px, o.height_px = frame.height_px;
+  o.size_n = o.axes.patterns().front().size_n;  // the buffer does not depend on the spacing
   check_writable_file(o.out_path);
   vk::Context ctx(o.device);
   nlohmann::json rows = nlohmann::json::array();
@@ -35,9 +39,9 @@ void memory(const MemoryOptions& o) {
              o.size_n, pattern.layers(), ctx.info().name);
   fmt::print("{:<17} {:<7} {:>14} {:>14} {:>16} {:>12} {:>12}\n", "precision", "scale", "buffer (texels)",
              "paper conv MiB", "allocated MiB", "allocated B", "paper prints");
-  for (const auto& name : o.precisions) {
+  for (const auto& name : o.axes.precisions) {
     const LayerPrecision precision = layer_precision_from_string(name);
-    for (int scale : o.scales.empty() ? find_method("flag").buffer_scales : o.scales) {
+    for (int scale : o.axes.scales.empty() ? find_method("flag").buffer_scales : o.axes.scales) {
       const FlagBufferExtent extent = flag_buffer_extent(o.width_px, o.height_px, pattern, scale);
       const double paper_bytes = flag_paper_bytes(o.width_px, o.height_px, pattern, precision, scale);
       const auto allocated = vk::image_3d_requirement_bytes(ctx, layer_format(precision), extent.width,
@@ -76,12 +80,14 @@ void memory(const MemoryOptions& o) {
 void add_memory_command(CLI::App& app) {
   auto o = std::make_shared<MemoryOptions>();
   auto* cmd = app.add_subcommand("memory", "FLAG 3D-buffer size: paper convention and actual allocation");
-  cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(1, 16384));
-  cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
+  AxisFlags& a = o->axes;
+  a.resolutions = {"1920x1080"};
+  a.sizes = {"41"};
+  a.precisions = {"f16", "f32"};  // scales: every one FLAG has
+  a.add_to(cmd, {Axis::precisions, Axis::scales}, {Axis::resolutions, Axis::sizes});
   const Method& flag = find_method("flag");
-  cmd->add_option("--precision", o->precisions, "Layer precisions")->check(CLI::IsMember(flag.precisions));
-  cmd->add_option("--scale", o->scales, "Buffer scales: 1 full, 2 half, 4 quarter")->check(CLI::IsMember(flag.buffer_scales));
+  a.option(Axis::precisions)->check(CLI::IsMember(flag.precisions));
+  a.option(Axis::scales)->check(CLI::IsMember(flag.buffer_scales));
   cmd->add_option("--device", o->device, "Vulkan device index or name part");
   cmd->add_option("--out", o->out_path, "JSON output path");
   cmd->callback([o] { memory(*o); });

@@ -17,19 +17,21 @@
 #include "report.hpp"
 #include "run.hpp"
 #include "scene.hpp"
+#include "sweep.hpp"
 
 namespace bokeh {
 
 namespace {
 
 struct RenderOptions {
-  std::string scene_name = "hoops";
-  std::string color_path, depth_path, lens_path, method = "flag", precision, backend = "gpu", device;
+  AxisFlags axes;  // one value each; render() copies them into the fields below
+  std::string scene_name;
+  std::string color_path, depth_path, lens_path, method, precision, backend, device;
   std::string out_path = "render.png";
-  int width_px = 800, height_px = 600, size_n = 41, spacing_px = 2;
+  int width_px = 0, height_px = 0, size_n = 0, spacing_px = 0;
   std::optional<double> fit_max_coc_px;
   MethodOptionFlags method_options;
-  int buffer_scale = 1;
+  int buffer_scale = 0;
   bool compare = false;
   std::string reference_cache = "build/reference-cache";
   double max_buffer_mb = 0;
@@ -103,6 +105,16 @@ void warn_about_input_range(const Image& color, const Method& method, const Filt
 void render(RenderOptions& o) {
   // Everything given is checked before any work, the scene not yet built: method and options, output
   // paths, --fit-max-coc, the lens, the input files' headers, device limits and memory.
+  o.axes.resolve();
+  const GatherPattern pattern = o.axes.patterns().front();
+  const Resolution frame = o.axes.frame_sizes().front();
+  o.scene_name = o.axes.scenes.front();
+  o.width_px = frame.width_px, o.height_px = frame.height_px;
+  o.method = o.axes.methods.front();
+  o.size_n = pattern.size_n, o.spacing_px = pattern.spacing_px;
+  o.precision = o.axes.precisions.empty() ? "" : o.axes.precisions.front();
+  o.buffer_scale = o.axes.scales.front();
+  o.backend = o.axes.backends.front();
   const Method& method = find_method(o.method);
   FilterOptions options = method.defaults({o.size_n, o.spacing_px});
   if (!o.precision.empty()) options.precision = o.precision;
@@ -186,28 +198,27 @@ void render(RenderOptions& o) {
 void add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* cmd = app.add_subcommand("render", "Render one image with one method");
-  auto* scene = cmd->add_option("--scene", o->scene_name, "Procedural scene")
-                    ->check(CLI::IsMember(procedural_scene_names()));
+  AxisFlags& a = o->axes;
+  a.scenes = {"hoops"};
+  a.resolutions = {"800x600"};
+  a.methods = {"flag"};
+  a.sizes = {"41"};
+  a.scales = {1};
+  a.backends = {"gpu"};  // precisions: empty, the method's own
+  a.add_to(cmd, {}, {Axis::scenes, Axis::resolutions, Axis::methods, Axis::sizes, Axis::precisions, Axis::scales,
+                     Axis::backends});
+  CLI::Option* scene = a.option(Axis::scenes);
   auto* color = cmd->add_option("--color", o->color_path, "Colour image (linear RGB, e.g. EXR)")->check(CLI::ExistingFile);
   auto* depth = cmd->add_option("--depth", o->depth_path, "Depth image: planar view-space depth in metres, channel 0")
                     ->check(CLI::ExistingFile);
   color->needs(depth);
   depth->needs(color);
   scene->excludes(color);
-  cmd->add_option("--width", o->width_px, "Procedural scene width in px")->check(CLI::Range(16, 16384));
-  cmd->add_option("--height", o->height_px, "Procedural scene height in px")->check(CLI::Range(16, 16384));
   cmd->add_option("--lens", o->lens_path,
                   "Lens JSON: focal_length_mm, f_stop, sensor_width_mm, focus_distance_m [, coc_model]")
       ->check(CLI::ExistingFile);
   cmd->add_option("--fit-max-coc", o->fit_max_coc_px, "Set the f-stop so the scene's largest CoC radius is this many px");
-  cmd->add_option("--method", o->method, "Filter method (`bokehbench methods` lists them)");
-  cmd->add_option("--gather,-N", o->size_n, "Gather pattern size N (odd)");
-  cmd->add_option("--spacing,-k", o->spacing_px, "Sample spacing k in px");
-  cmd->add_option("--precision", o->precision, "Intermediate storage, e.g. FLAG layers f16 or f32 (default: the method's)");
   o->method_options.add_to(cmd);
-  cmd->add_option("--buffer-scale", o->buffer_scale,
-                  "Resolution divisor of the method's intermediates (FLAG: 3D buffer at 1/1, 1/2 or 1/4)");
-  cmd->add_option("--backend", o->backend, "gpu (Vulkan) or cpu (reference)")->check(CLI::IsMember({"gpu", "cpu"}));
   cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--out", o->out_path, "Output image: .exr (linear) or .png (tone-mapped)");
   cmd->add_flag("--compare", o->compare,

@@ -40,7 +40,7 @@ constexpr float kFloatMax = std::numeric_limits<float>::max();
 
 struct StabilityOptions {
   std::string out_path = "results/stability.json", device;
-  std::vector<std::string> methods, backends = {"gpu", "cpu"};
+  AxisFlags axes;  // methods (default: every registered method) and backends
   bool quick = false;
   int cpu_threads = 0;
 };
@@ -369,17 +369,18 @@ std::string range_text(const nlohmann::json& r) {
   return r["low"] == r["high"] ? head(r["low"]) : head(r["low"]) + ".." + head(r["high"]);
 }
 
-void stability(const StabilityOptions& o) {
+void stability(StabilityOptions& o) {
+  o.axes.resolve();
   const auto start = std::chrono::steady_clock::now();
   check_writable_file(o.out_path);
   std::vector<const Method*> methods;
-  if (o.methods.empty())
+  if (o.axes.methods.empty())
     for (const Method& m : registered_methods()) methods.push_back(&m);
   else
-    for (const auto& name : o.methods) methods.push_back(&find_method(name));
+    for (const auto& name : o.axes.methods) methods.push_back(&find_method(name));
   const int threads = o.cpu_threads > 0 ? o.cpu_threads : default_cpu_threads();
   std::optional<vk::Context> ctx;
-  if (std::find(o.backends.begin(), o.backends.end(), "gpu") != o.backends.end()) {
+  if (std::find(o.axes.backends.begin(), o.axes.backends.end(), "gpu") != o.axes.backends.end()) {
     vk::DeviceRequirements wanted;
     for (const Method* m : methods)
       for (const auto& p : m->precisions) {
@@ -391,12 +392,12 @@ void stability(const StabilityOptions& o) {
   }
   const std::vector<Case> cases = make_cases(o.quick);
   fmt::print("stability: {} methods, {} cases each, backends {}, device {}\n", methods.size(), cases.size(),
-             fmt::join(o.backends, " "), ctx ? ctx->info().name : "none");
+             fmt::join(o.axes.backends, " "), ctx ? ctx->info().name : "none");
 
   nlohmann::json configurations = nlohmann::json::array();
   for (const Method* m : methods)
     for (const auto& precision : m->precisions)
-      for (const auto& backend : o.backends) {
+      for (const auto& backend : o.axes.backends) {
         FilterOptions base = m->defaults(pattern_for(4));
         base.precision = precision;
         vk::Context* device = backend == "gpu" ? &*ctx : nullptr;
@@ -484,7 +485,7 @@ void stability(const StabilityOptions& o) {
       if (c.axis == axis) axes[axis].push_back({{"label", c.label}, {"value", value_json(c.value)}, {"nominal", c.nominal}});
   }
   const nlohmann::json body = {
-      {"config", {{"quick", o.quick}, {"backends", o.backends}, {"methods", o.methods}}},
+      {"config", {{"quick", o.quick}, {"backends", o.axes.backends}, {"methods", o.axes.methods}}},
       {"axes", axes},
       {"checks",
        {{"point_light", "one light of intensity I at the centre of a black frame of constant depth: every pixel has "
@@ -524,8 +525,8 @@ void add_stability_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "stability", "Safe ranges of radius, intensity, depth and width for every method x precision, GPU and CPU");
   cmd->add_option("--out", o->out_path, "Results JSON")->capture_default_str();
-  cmd->add_option("--methods", o->methods, "Methods (default: every registered method)");
-  cmd->add_option("--backends", o->backends, "gpu and/or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
+  o->axes.backends = {"gpu", "cpu"};
+  o->axes.add_to(cmd, {Axis::methods, Axis::backends}, {});
   cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--cpu-threads", o->cpu_threads, "Threads for the CPU references (default: every core)")
       ->check(CLI::Range(1, 1024));

@@ -15,17 +15,11 @@ namespace bokeh {
 namespace {
 
 struct TradeoffOptions {
-  std::string scene = "hoops", backend = "gpu";
-  int width_px = 800, height_px = 600;
+  AxisFlags axes;
   double max_coc_px = 40;
-  // Gather patterns as NxK; each covers max_coc_px when k (N - 1) / 2 equals it.
-  std::vector<std::string> patterns = {"41x2", "21x4", "11x8"};
-  std::vector<std::string> methods;
   SweepFlags sweep;
   MethodOptionFlags method_options;
-  bool quick = false;
-  CLI::Option *width_opt = nullptr, *height_opt = nullptr, *coc_opt = nullptr, *patterns_opt = nullptr,
-              *budget_opt = nullptr;
+  CLI::Option* coc_opt = nullptr;
 };
 
 // Configurations nothing beats on both median time and PSNR (exact = +inf), fastest first. PSNRs
@@ -43,30 +37,30 @@ nlohmann::json pareto_ids(const nlohmann::json& points) {
 }
 
 void tradeoff(TradeoffOptions& o) {
-  if (o.quick) {
-    if (!given(o.width_opt)) o.width_px = 160;
-    if (!given(o.height_opt)) o.height_px = 120;
-    if (!given(o.coc_opt)) o.max_coc_px = 8;
-    if (!given(o.patterns_opt)) o.patterns = {"9x2", "5x4"};
-    if (!given(o.budget_opt)) o.sweep.budget_s = 15;
-  }
-  if (o.methods.empty()) o.methods = default_sweep_methods();
+  o.axes.resolve(&o.sweep);
+  if (o.axes.quick && !given(o.coc_opt)) o.max_coc_px = 8;
+  if (o.axes.methods.empty()) o.axes.methods = default_sweep_methods();
   Axes axes;
-  axes.methods = o.methods;
-  axes.backends = {o.backend};
-  axes.scenes = {o.scene};
-  axes.resolutions = {{o.width_px, o.height_px}};
-  for (const auto& p : o.patterns) axes.patterns.push_back(parse_pattern(p));
+  axes.methods = o.axes.methods;
+  axes.backends = o.axes.backends;
+  axes.scenes = o.axes.scenes;
+  axes.resolutions = o.axes.frame_sizes();
+  axes.patterns = o.axes.patterns();
   axes.precisions = {"all"};
   axes.scales = {0};
-  axes.option_values = o.method_options.values_for(o.methods);
+  axes.option_values = o.method_options.values_for(axes.methods);
   axes.sweep_options = true;
   axes.max_coc_px = o.max_coc_px;
 
   SweepSettings s = o.sweep.settings("tradeoff", "plot_tradeoff.py");
-  s.config = {{"scene", o.scene},       {"width_px", o.width_px},   {"height_px", o.height_px},
-              {"max_coc_px", o.max_coc_px}, {"backend", o.backend}, {"patterns", o.patterns},
-              {"methods", o.methods},
+  s.config = {{"scene", axes.scenes.front()},
+              {"width_px", axes.resolutions.front().width_px},
+              {"height_px", axes.resolutions.front().height_px},
+              {"max_coc_px", o.max_coc_px},
+              {"backend", axes.backends.front()},
+              {"patterns", o.axes.sizes},
+              {"spacing_px", o.axes.spacing_px},
+              {"methods", axes.methods},
               {"pareto", "minimise frame_ms median, maximise PSNR vs the energy_sum exact reference"}};
   s.derive = [](nlohmann::json& doc) { doc["pareto_front"] = pareto_ids(doc["points"]); };
   s.summary = [](const nlohmann::json& doc) {
@@ -85,18 +79,18 @@ void tradeoff(TradeoffOptions& o) {
 void add_tradeoff_command(CLI::App& app) {
   auto o = std::make_shared<TradeoffOptions>();
   auto* cmd = app.add_subcommand("tradeoff", "Time vs error for every configuration, with the Pareto front");
-  cmd->add_option("--scene", o->scene, "Procedural scene")->check(CLI::IsMember(procedural_scene_names()));
-  o->width_opt = cmd->add_option("--width", o->width_px, "Image width in px")->check(CLI::Range(16, 16384));
-  o->height_opt = cmd->add_option("--height", o->height_px, "Image height in px")->check(CLI::Range(16, 16384));
+  AxisFlags& a = o->axes;
+  a.sizes = {"41x2", "21x4", "11x8"};  // each covers max_coc_px when k (N - 1) / 2 equals it
+  a.resolutions = {"800x600"};
+  a.scenes = {"hoops"};
+  a.backends = {"gpu"};
+  a.add_to(cmd, {Axis::sizes, Axis::methods}, {Axis::resolutions, Axis::scenes, Axis::backends});
   o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px, "The scene's largest CoC radius in px (sets the f-stop)")
                    ->check(CLI::PositiveNumber);
-  o->patterns_opt = cmd->add_option("--patterns", o->patterns, "Gather patterns NxK (e.g. 41x2 21x4)");
-  cmd->add_option("--methods", o->methods, "Methods (default: every method in default sweeps)");
-  cmd->add_option("--backend", o->backend, "gpu or cpu")->check(CLI::IsMember({"gpu", "cpu"}));
   o->method_options.add_to(cmd);
   o->sweep.add_to(cmd, 240);
-  o->budget_opt = cmd->get_option("--budget-s");
-  cmd->add_flag("--quick", o->quick, "Small grid for CI and tests (160x120)");
+  a.add_quick(cmd, "Small grid for CI and tests (160x120, patterns 9x2 and 5x4, max CoC 8 px, 15 s)",
+              {{Axis::resolutions, {"160x120"}}, {Axis::sizes, {"9x2", "5x4"}}}, 15);
   cmd->callback([o] { tradeoff(*o); });
 }
 

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "method.hpp"
+#include "scene.hpp"
 #include "sweep.hpp"
 
 namespace bokeh {
@@ -45,10 +46,169 @@ std::map<std::string, double> MethodOptionFlags::values_for(const std::vector<st
   return values;
 }
 
+namespace {
+
+struct AxisSpelling {
+  const char* names;  // the canonical name first, then the aliases
+  const char* one;    // help when the command takes one value
+  const char* many;   // help when it takes a list
+};
+
+AxisSpelling spelling(Axis axis) {
+  switch (axis) {
+    case Axis::sizes:
+      return {"-N,--sizes,--gather,--pattern,--patterns", "Gather size N (odd), or NxK with its own spacing",
+              "Gather sizes N (odd), or NxK with a spacing of their own"};
+    case Axis::resolutions:
+      return {"--resolutions", "Frame size WIDTHxHEIGHT", "Frame sizes WIDTHxHEIGHT"};
+    case Axis::precisions:
+      return {"--precisions,--precision", "Storage of the intermediates, e.g. FLAG layers f16 (default: the method's)",
+              "Storages of the intermediates, e.g. FLAG layers f16 f32 (default: each method's own; all: every one)"};
+    case Axis::scales:
+      return {"--scales,--scale,--buffer-scale", "Resolution divisor of the intermediates (FLAG: 1, 2 or 4)",
+              "Resolution divisors of the intermediates (FLAG: 1 full, 2 half, 4 quarter)"};
+    case Axis::scenes:
+      return {"--scenes,--scene", "Procedural scene", "Procedural scenes"};
+    case Axis::methods:
+      return {"--methods,--method", "Filter method (`bokehbench methods` lists them)",
+              "Methods (default: every method in the default sweeps)"};
+    case Axis::backends:
+      return {"--backends,--backend", "gpu (Vulkan) or cpu (reference)", "gpu and/or cpu"};
+  }
+  throw std::logic_error("unknown axis");
+}
+
+}  // namespace
+
+void AxisFlags::add_to(CLI::App* cmd, const std::vector<Axis>& lists, const std::vector<Axis>& single) {
+  single_ = single;
+  std::vector<Axis> all = lists;
+  all.insert(all.end(), single.begin(), single.end());
+  for (Axis axis : all) {
+    const AxisSpelling s = spelling(axis);
+    const bool one = std::find(single.begin(), single.end(), axis) != single.end();
+    const std::string help = one ? s.one : s.many;
+    CLI::Option* opt = nullptr;
+    switch (axis) {
+      case Axis::sizes: opt = cmd->add_option(s.names, sizes, help); break;
+      case Axis::resolutions: opt = cmd->add_option(s.names, resolutions, help); break;
+      case Axis::precisions: opt = cmd->add_option(s.names, precisions, help); break;
+      case Axis::scales: opt = cmd->add_option(s.names, scales, help); break;
+      case Axis::scenes:
+        opt = cmd->add_option(s.names, scenes, help)->check(CLI::IsMember(procedural_scene_names()));
+        break;
+      case Axis::methods: opt = cmd->add_option(s.names, methods, help); break;
+      case Axis::backends: opt = cmd->add_option(s.names, backends, help)->check(CLI::IsMember({"gpu", "cpu"})); break;
+    }
+    opt->capture_default_str();
+    options_[axis] = opt;
+    if (axis == Axis::sizes) cmd->add_option("-k,--spacing", spacing_px, "Sample spacing k in px of sizes given as N")
+                                 ->check(CLI::Range(1, 1024))
+                                 ->capture_default_str();
+    if (axis == Axis::resolutions && one) {
+      width_ = cmd->add_option("--width", width_px_, "Frame width in px (with the height of --resolutions)")
+                   ->check(CLI::Range(16, 16384));
+      height_ = cmd->add_option("--height", height_px_, "Frame height in px (with the width of --resolutions)")
+                    ->check(CLI::Range(16, 16384));
+    }
+  }
+}
+
+void AxisFlags::add_quick(CLI::App* cmd, const std::string& help, std::map<Axis, std::vector<std::string>> values,
+                          double quick_budget_s) {
+  quick_values_ = std::move(values);
+  quick_budget_s_ = quick_budget_s;
+  cmd->add_flag("--quick", quick, help);
+}
+
+bool AxisFlags::given(Axis axis) const {
+  const auto it = options_.find(axis);
+  return it != options_.end() && it->second->count() > 0;
+}
+
+void AxisFlags::resolve(SweepFlags* sweep) {
+  if (quick) {
+    for (const auto& [axis, values] : quick_values_) {
+      if (given(axis)) continue;
+      if (axis == Axis::sizes) sizes = values;
+      if (axis == Axis::resolutions) resolutions = values;
+      if (axis == Axis::scenes) scenes = values;
+      if (axis == Axis::methods) methods = values;
+      if (axis == Axis::precisions) precisions = values;
+    }
+    if (sweep && quick_budget_s_ > 0 && !bokeh::given(sweep->budget_option)) sweep->budget_s = quick_budget_s_;
+  }
+  if ((width_ && width_->count()) || (height_ && height_->count())) {
+    Resolution r = resolutions.empty() ? Resolution{} : parse_resolution(resolutions.front());
+    if (width_->count()) r.width_px = width_px_;
+    if (height_->count()) r.height_px = height_px_;
+    resolutions = {r.text()};
+  }
+  auto refuse_repeats = [](const char* flag, auto values) {
+    std::sort(values.begin(), values.end());
+    if (const auto it = std::adjacent_find(values.begin(), values.end()); it != values.end())
+      throw std::invalid_argument(fmt::format("{} {} is given twice", flag, *it));
+  };
+  refuse_repeats("--sizes", sizes);
+  refuse_repeats("--resolutions", resolutions);
+  refuse_repeats("--precisions", precisions);
+  refuse_repeats("--scales", scales);
+  refuse_repeats("--scenes", scenes);
+  refuse_repeats("--methods", methods);
+  refuse_repeats("--backends", backends);
+  for (Axis axis : single_) {
+    std::size_t count = 0;
+    switch (axis) {
+      case Axis::sizes: count = sizes.size(); break;
+      case Axis::resolutions: count = resolutions.size(); break;
+      case Axis::precisions: count = precisions.size() > 1 ? 2 : 1; break;  // empty: the method's default
+      case Axis::scales: count = scales.size() > 1 ? 2 : 1; break;
+      case Axis::scenes: count = scenes.size(); break;
+      case Axis::methods: count = methods.size(); break;
+      case Axis::backends: count = backends.size(); break;
+    }
+    if (count != 1) {
+      const std::string names = spelling(axis).names;
+      const std::string name = names.substr(names.find("--"), names.find(',', names.find("--")) - names.find("--"));
+      throw std::invalid_argument(fmt::format("{}: this command takes one value, not {}", name, count));
+    }
+  }
+  frame_sizes();  // the errors name the text now, before any work
+  patterns();
+}
+
+std::vector<GatherPattern> AxisFlags::patterns() const {
+  std::vector<GatherPattern> out;
+  for (const auto& text : sizes) {
+    if (text.find('x') != std::string::npos) {
+      out.push_back(parse_pattern(text));
+      continue;
+    }
+    std::size_t used = 0;
+    int n = 0;
+    try {
+      n = std::stoi(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != text.size())
+      throw std::invalid_argument(fmt::format("--sizes '{}' is not a gather size N or a pattern NxK", text));
+    out.push_back({n, spacing_px});
+    validate(out.back());
+  }
+  return out;
+}
+
+std::vector<Resolution> AxisFlags::frame_sizes() const {
+  std::vector<Resolution> out;
+  for (const auto& text : resolutions) out.push_back(parse_resolution(text));
+  return out;
+}
+
 void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb) {
   budget_s = default_budget_s;
   max_buffer_mb = default_max_buffer_mb;
-  cmd->add_option("--budget-s", budget_s, "Measuring time to aim for, all points together (each still gets "
+  budget_option = cmd->add_option("--budget-s", budget_s, "Measuring time to aim for, all points together (each still gets "
                                           "its minimum samples)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

@@ -11,6 +11,9 @@
 namespace bokeh {
 
 struct SweepSettings;
+struct GatherPattern;
+struct Resolution;
+struct SweepFlags;
 namespace compare {
 struct Report;
 }
@@ -28,6 +31,46 @@ class MethodOptionFlags {
   std::map<std::string, std::string> given_;
 };
 
+// The axes, spelled alike in every command (the spellings before them stay as aliases for a release):
+//   -N, --sizes       gather sizes N, or NxK with a spacing of its own    (--gather, --pattern, --patterns)
+//   -k, --spacing     the spacing of sizes given as N
+//   --resolutions     frame sizes WxH (--width / --height change one)
+//   --precisions  (--precision)   --scales  (--scale, --buffer-scale)
+//   --scenes  (--scene)           --methods  (--method)        --backends  (--backend)
+// A command adds the axes it has: `lists` take one value or more, `single` ones exactly one (render
+// makes one image; figure9 draws one frame size). --quick gives each axis its quick value unless the
+// axis was given on the command line.
+enum class Axis { sizes, resolutions, precisions, scales, scenes, methods, backends };
+
+struct AxisFlags {
+  std::vector<std::string> sizes, resolutions, precisions, scenes, methods, backends;  // as given or defaulted
+  std::vector<int> scales;
+  int spacing_px = 2;
+  bool quick = false;
+
+  void add_to(CLI::App* cmd, const std::vector<Axis>& lists, const std::vector<Axis>& single);
+  // Adds --quick: each axis in `values` takes its quick value (sizes and resolutions as text) unless
+  // given; so does the budget (--budget-s) of `sweep` when quick_budget_s > 0.
+  void add_quick(CLI::App* cmd, const std::string& help, std::map<Axis, std::vector<std::string>> values,
+                 double quick_budget_s = 0);
+  // After parsing: applies --quick, --width/--height, and checks the single axes have one value;
+  // throws std::invalid_argument naming the flag.
+  void resolve(SweepFlags* sweep = nullptr);
+  bool given(Axis axis) const;
+  CLI::Option* option(Axis axis) const { return options_.at(axis); }
+
+  std::vector<GatherPattern> patterns() const;  // validated
+  std::vector<Resolution> frame_sizes() const;  // validated
+
+ private:
+  std::map<Axis, CLI::Option*> options_;
+  std::map<Axis, std::vector<std::string>> quick_values_;
+  double quick_budget_s_ = 0;
+  std::vector<Axis> single_;
+  CLI::Option *width_ = nullptr, *height_ = nullptr;
+  int width_px_ = 0, height_px_ = 0;
+};
+
 // What every sweep command takes: budget, device, output folders, memory budget, seed.
 struct SweepFlags {
   double budget_s = 0;
@@ -38,6 +81,7 @@ struct SweepFlags {
   int inject_slowdown_pct = 0;  // a test of `compare` only (selftest-compare); 0: off
   bool plot = true;
   bool serve = false;  // a worker of `bokehbench ab` (paired.hpp)
+  CLI::Option* budget_option = nullptr;
   void add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb = 0);
   SweepSettings settings(const std::string& name, const std::string& plot_script) const;
 };
