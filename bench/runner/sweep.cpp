@@ -293,6 +293,155 @@ nlohmann::json methods_json(const std::vector<SweepPoint>& points) {
   return out;
 }
 
+// Each point's error against the exact references of its scene, frame size and CoC (made once and
+// shared by the points that need them, cached on disk), and against the sweep's extra reference.
+class AccuracyOfPoints {
+ public:
+  AccuracyOfPoints(const std::vector<SweepPoint>& points, SweepTargets& targets, const SweepSettings& s)
+      : points_(points), targets_(targets), settings_(s), cache_(s.reference_cache) {}
+
+  nlohmann::json error(std::size_t i, const Image& output) {
+    const SweepPoint& p = points_[i];
+    const Scene& scene = targets_.scene(p);
+    const Lens lens = targets_.lens(p);
+    const float clamp = p.options.pattern.max_radius_px();
+    const std::string key = fmt::format("{}/{}/{}/{}", p.scene, p.resolution.text(), p.max_coc_px, clamp);
+    auto it = exact_.find(key);
+    if (it == exact_.end()) it = exact_.emplace(key, exact_references(scene, lens, clamp, cache_)).first;
+    nlohmann::json error = error_json(output, it->second);
+    if (settings_.extra_reference)
+      if (auto ref = settings_.extra_reference(p, scene, lens)) {
+        auto e = extra_.find(ref->key);
+        if (e == extra_.end()) e = extra_.emplace(ref->key, ref->make()).first;
+        error["vs_" + ref->field] = metrics_json(compare_images(output, e->second));
+      }
+    return error;
+  }
+
+ private:
+  const std::vector<SweepPoint>& points_;
+  SweepTargets& targets_;
+  const SweepSettings& settings_;
+  ExactReferenceCache cache_;
+  std::map<std::string, ExactReferences> exact_;
+  std::map<std::string, Image> extra_;
+};
+
+// The probes of the machine's limits: on the device when there is one, on the CPU when a point runs there.
+std::vector<CalibrationKernel> calibration_kernels(vk::Context* ctx, bool any_cpu, int cpu_threads) {
+  std::vector<CalibrationKernel> calibration;
+  if (ctx)
+    for (auto& k : gpu_calibration(*ctx)) calibration.push_back(std::move(k));
+  if (any_cpu)
+    for (auto& k : cpu_calibration(cpu_threads)) calibration.push_back(std::move(k));
+  return calibration;
+}
+
+// The probes' times per round and the limits they give; each pass's bandwidth as a fraction of the
+// copy kernel's, measured in the same run.
+void add_probes_and_limits(nlohmann::json& measurement, nlohmann::json& measured_points,
+                           const std::vector<CalibrationKernel>& calibration, const runner::RunRecord& rec) {
+  nlohmann::json probes = nlohmann::json::object(), limits = nlohmann::json::object();
+  for (const auto& k : calibration) {
+    const auto it = rec.probe_ms.find(k.name);
+    if (it == rec.probe_ms.end() || it->second.empty()) continue;
+    const runner::Distribution d = runner::distribution(it->second);
+    probes[k.name] = {{"ms_per_round", it->second},
+                      {"cpu_ms_per_round", rec.probe_cpu_ms.at(k.name)},
+                      {"ms", distribution_json(d)},
+                      {"drift", d.median > 0 ? (d.max - d.min) / d.median : 0.0},
+                      {"bytes", k.bytes},
+                      {"flops", k.flops}};
+    if (k.bytes > 0) limits[k.name + "_gb_per_s"] = k.bytes / (d.median * 1e6);
+    if (k.flops > 0) limits[k.name + "_gflop_per_s"] = k.flops / (d.median * 1e6);
+  }
+  for (auto& point : measured_points) {
+    const std::string limit = point["backend"].get<std::string>() + "_copy_gb_per_s";
+    if (!limits.contains(limit)) continue;
+    for (auto& [pass, t] : point["throughput"].items())
+      if (t.contains("gb_per_s")) t["fraction_of_copy_bandwidth"] = t["gb_per_s"].get<double>() / limits[limit].get<double>();
+  }
+  measurement["probes"] = probes;
+  measurement["limits"] = limits;
+}
+
+// The results document of a run so far (complete, or partial at a checkpoint or an interruption).
+nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::vector<PointInfo>& info,
+                              const runner::RunRecord& rec, const std::vector<CalibrationKernel>& calibration,
+                              const SweepSettings& s, const runner::Policy& policy, double elapsed_s) {
+  nlohmann::json measured = nlohmann::json::array(), skipped = nlohmann::json::array();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& r = rec.points[i];
+    if (!r.skipped.empty()) {
+      nlohmann::json entry = identity_json(points[i]);
+      entry.update({{"reason", r.skipped}, {"memory", info[i].memory}});
+      skipped.push_back(std::move(entry));
+    } else if (!r.samples.empty()) {
+      measured.push_back(point_json(points[i], r, info[i]));
+    }
+  }
+  nlohmann::json order = nlohmann::json::array();
+  for (const auto& round : rec.round_order) {
+    nlohmann::json ids = nlohmann::json::array();
+    for (std::size_t i : round) ids.push_back(points[i].id);
+    order.push_back(ids);
+  }
+  nlohmann::json measurement = {
+      {"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded); "
+                      "each visit takes one sample of frames_per_sample frames"},
+      {"seed", s.policy.seed},
+      {"budget_s", s.policy.budget_s},
+      {"min_samples", s.policy.min_samples},
+      {"max_samples", s.policy.max_samples},
+      {"settled_relative_iqr", s.policy.settled_relative_iqr},
+      {"sample_min_ms", s.policy.sample_min_ms},
+      {"lead_in_ms", policy.lead_in_ms},
+      {"extra_work_fraction", policy.extra_work_fraction},
+      {"rounds", rec.round_order.size()},
+      {"round_order", order},
+      {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "
+                 "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included; "
+                 "samples_cpu_ms: the process CPU time (all threads) per frame over the same sample"}};
+  add_probes_and_limits(measurement, measured, calibration, rec);
+  nlohmann::json config = s.config;
+  if (policy.extra_work_fraction > 0)  // a test of `compare`, never a real run: say so where it shows
+    config["injected_slowdown_pct"] = std::lround(policy.extra_work_fraction * 100);
+  return {{"status", rec.status},    {"config", config},     {"methods", methods_json(points)},
+          {"measurement", measurement}, {"points", measured}, {"skipped", skipped},
+          {"elapsed_s", elapsed_s}};
+}
+
+// One line per first visit, then one per round, each with the time left.
+std::function<void(const runner::Progress&, const runner::PointRecord&)> progress_printer(std::size_t measurable) {
+  return [measurable, printed_round = -1](const runner::Progress& pr, const runner::PointRecord& rec) mutable {
+    if (pr.round == 0) {
+      std::string what = rec.skipped.empty()
+                             ? fmt::format("{:10.3f} ms ({} frames/sample)", rec.samples.back().frame_ms, rec.frames_per_sample)
+                             : "skipped: " + rec.skipped;
+      fmt::print("[{:>3}/{}] {:<58} {}  ~{} left\n", pr.visits_done, measurable, rec.name, what,
+                 duration_text(pr.eta_s));
+    } else if (pr.round != printed_round) {
+      fmt::print("round {}: {} of {} points still measuring, {} elapsed, ~{} left\n", pr.round + 1, pr.points_active,
+                 measurable, duration_text(pr.elapsed_s), duration_text(pr.eta_s));
+    }
+    printed_round = pr.round;
+    std::fflush(stdout);
+  };
+}
+
+// Where a sweep's files go: NAME.json when complete, NAME.partial.json before (and after an
+// interruption, beside a complete file of an earlier run, never over it); the same for _gbench.
+struct SweepFiles {
+  std::string final_json, partial_json, gbench, gbench_partial;
+  SweepFiles(const std::string& out_dir, const std::string& name) {
+    const std::filesystem::path dir(out_dir);
+    final_json = (dir / (name + ".json")).string();
+    partial_json = (dir / (name + ".partial.json")).string();
+    gbench = (dir / (name + "_gbench.json")).string();
+    gbench_partial = (dir / (name + "_gbench.partial.json")).string();
+  }
+};
+
 }  // namespace
 
 nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSettings& s) {
@@ -301,10 +450,12 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     return nlohmann::json::object();
   }
   const auto wall_start = std::chrono::steady_clock::now();
+  auto elapsed_s = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count(); };
   // Where the results go is checked before anything is measured.
   check_writable_dir(s.out_dir);
   remove_stale_temporaries(s.out_dir);
   if (s.plot && !s.plot_script.empty()) check_writable_dir(s.plots_dir);
+  const SweepFiles files(s.out_dir, s.name);
   SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb);
   vk::Context* ctx = targets.context();
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
@@ -323,29 +474,9 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     info[i].work = targets.plans()[i].work;
     info[i].memory = targets.plans()[i].memory;
   }
-
-  // References, made once and shared by the points that need them.
-  ExactReferenceCache cache(s.reference_cache);
-  std::map<std::string, ExactReferences> exact;
-  std::map<std::string, Image> extra;
-
-  auto first_ready = [&](std::size_t i, const Image& output, const nlohmann::json& stats) {
-    info[i].stats = stats;
-    const SweepPoint& p = points[i];
-    const Scene& scene = targets.scene(p);
-    const Lens lens = targets.lens(p);
-    const float clamp = p.options.pattern.max_radius_px();
-    const std::string key = fmt::format("{}/{}/{}/{}", p.scene, p.resolution.text(), p.max_coc_px, clamp);
-    auto it = exact.find(key);
-    if (it == exact.end()) it = exact.emplace(key, exact_references(scene, lens, clamp, cache)).first;
-    info[i].error = error_json(output, it->second);
-    if (s.extra_reference)
-      if (auto ref = s.extra_reference(p, scene, lens)) {
-        auto e = extra.find(ref->key);
-        if (e == extra.end()) e = extra.emplace(ref->key, ref->make()).first;
-        info[i].error["vs_" + ref->field] = metrics_json(compare_images(output, e->second));
-      }
-  };
+  const std::size_t measurable = std::count(skip.begin(), skip.end(), "");
+  AccuracyOfPoints accuracy(points, targets, s);
+  std::vector<CalibrationKernel> calibration = calibration_kernels(ctx, any_cpu, targets.cpu_threads());
 
   runner::Hooks hooks;
   hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
@@ -360,114 +491,23 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
       }
       // What the filter allocated for this scene (bytes above is the model, which budgets use).
       info[i].memory["allocated_bytes"] = g->intermediate_bytes();
-      first_ready(i, g->output(), g->stats());
+      info[i].stats = g->stats();
+      info[i].error = accuracy.error(i, g->output());
     }
-    if (auto* c = dynamic_cast<CpuTarget*>(&t)) first_ready(i, c->output(), c->stats());
+    if (auto* c = dynamic_cast<CpuTarget*>(&t)) {
+      info[i].stats = c->stats();
+      info[i].error = accuracy.error(i, c->output());
+    }
   };
-  std::vector<CalibrationKernel> calibration;
-  if (ctx)
-    for (auto& k : gpu_calibration(*ctx)) calibration.push_back(std::move(k));
-  if (any_cpu)
-    for (auto& k : cpu_calibration(targets.cpu_threads())) calibration.push_back(std::move(k));
   for (auto& k : calibration) hooks.probes.emplace_back(k.name, std::move(k.target));
-
-  const std::filesystem::path out_dir(s.out_dir);
-  const std::string final_path = (out_dir / (s.name + ".json")).string();
-  const std::string partial_path = (out_dir / (s.name + ".partial.json")).string();
-  const std::string gbench_path = (out_dir / (s.name + "_gbench.json")).string();
-  const std::string gbench_partial = (out_dir / (s.name + "_gbench.partial.json")).string();
-
-  nlohmann::json config = s.config;
-  if (policy.extra_work_fraction > 0)  // a test of `compare`, never a real run: say so where it shows
-    config["injected_slowdown_pct"] = std::lround(policy.extra_work_fraction * 100);
-  auto document = [&](const runner::RunRecord& rec) {
-    nlohmann::json measured = nlohmann::json::array(), skipped = nlohmann::json::array();
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const auto& r = rec.points[i];
-      if (!r.skipped.empty()) {
-        nlohmann::json entry = identity_json(points[i]);
-        entry.update({{"reason", r.skipped}, {"memory", info[i].memory}});
-        skipped.push_back(std::move(entry));
-      } else if (!r.samples.empty()) {
-        measured.push_back(point_json(points[i], r, info[i]));
-      }
-    }
-    nlohmann::json order = nlohmann::json::array(), probes = nlohmann::json::object(), limits = nlohmann::json::object();
-    for (const auto& round : rec.round_order) {
-      nlohmann::json ids = nlohmann::json::array();
-      for (std::size_t i : round) ids.push_back(points[i].id);
-      order.push_back(ids);
-    }
-    for (const auto& k : calibration) {
-      const auto it = rec.probe_ms.find(k.name);
-      if (it == rec.probe_ms.end() || it->second.empty()) continue;
-      const runner::Distribution d = runner::distribution(it->second);
-      probes[k.name] = {{"ms_per_round", it->second},
-                        {"cpu_ms_per_round", rec.probe_cpu_ms.at(k.name)},
-                        {"ms", distribution_json(d)},
-                        {"drift", d.median > 0 ? (d.max - d.min) / d.median : 0.0},
-                        {"bytes", k.bytes},
-                        {"flops", k.flops}};
-      if (k.bytes > 0) limits[k.name + "_gb_per_s"] = k.bytes / (d.median * 1e6);
-      if (k.flops > 0) limits[k.name + "_gflop_per_s"] = k.flops / (d.median * 1e6);
-    }
-    // Each pass's bandwidth as a fraction of the copy kernel's, measured in the same run.
-    for (auto& point : measured) {
-      const std::string limit = point["backend"].get<std::string>() + "_copy_gb_per_s";
-      if (!limits.contains(limit)) continue;
-      for (auto& [pass, t] : point["throughput"].items())
-        if (t.contains("gb_per_s")) t["fraction_of_copy_bandwidth"] = t["gb_per_s"].get<double>() / limits[limit].get<double>();
-    }
-    nlohmann::json doc = {
-        {"status", rec.status},
-        {"config", config},
-        {"methods", methods_json(points)},
-        {"measurement",
-         {{"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded); "
-                          "each visit takes one sample of frames_per_sample frames"},
-          {"seed", s.policy.seed},
-          {"budget_s", s.policy.budget_s},
-          {"min_samples", s.policy.min_samples},
-          {"max_samples", s.policy.max_samples},
-          {"settled_relative_iqr", s.policy.settled_relative_iqr},
-          {"sample_min_ms", s.policy.sample_min_ms},
-          {"lead_in_ms", policy.lead_in_ms},
-          {"extra_work_fraction", policy.extra_work_fraction},
-          {"rounds", rec.round_order.size()},
-          {"round_order", order},
-          {"probes", probes},
-          {"limits", limits},
-          {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "
-                     "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included; "
-                     "samples_cpu_ms: the process CPU time (all threads) per frame over the same sample"}}},
-        {"points", measured},
-        {"skipped", skipped},
-        {"elapsed_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()}};
-    return doc;
-  };
-
   auto last_write = std::chrono::steady_clock::now() - std::chrono::hours(1);
   hooks.checkpoint = [&](const runner::RunRecord& rec) {
     if (std::chrono::steady_clock::now() - last_write < std::chrono::seconds(2)) return;
-    write_results(partial_path, "bokehbench." + s.name, context, document(rec));
+    write_results(files.partial_json, "bokehbench." + s.name, context,
+                  sweep_document(points, info, rec, calibration, s, policy, elapsed_s()));
     last_write = std::chrono::steady_clock::now();
   };
-  std::size_t measurable = std::count(skip.begin(), skip.end(), "");
-  int printed_round = -1;
-  hooks.progress = [&](const runner::Progress& pr, const runner::PointRecord& rec) {
-    if (pr.round == 0) {
-      std::string what = rec.skipped.empty()
-                             ? fmt::format("{:10.3f} ms ({} frames/sample)", rec.samples.back().frame_ms, rec.frames_per_sample)
-                             : "skipped: " + rec.skipped;
-      fmt::print("[{:>3}/{}] {:<58} {}  ~{} left\n", pr.visits_done, measurable, rec.name, what,
-                 duration_text(pr.eta_s));
-    } else if (pr.round != printed_round) {
-      fmt::print("round {}: {} of {} points still measuring, {} elapsed, ~{} left\n", pr.round + 1, pr.points_active,
-                 measurable, duration_text(pr.elapsed_s), duration_text(pr.eta_s));
-    }
-    printed_round = pr.round;
-    std::fflush(stdout);
-  };
+  hooks.progress = progress_printer(measurable);
 
   fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),
              measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
@@ -481,7 +521,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     record = runner::run(names, skip, policy, hooks);
   }
   context["power_state"]["end"] = power_state(ctx ? &ctx->info() : nullptr);
-  nlohmann::json doc = document(record);
+  nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
   const bool complete = record.status == "complete";
   if (s.derive) s.derive(doc);
   // gbench's own statistics and names, for compare.py.
@@ -492,21 +532,20 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const std::string gbench =
       any_samples ? gbench_json(s.name, points, record)
                   : nlohmann::json({{"context", context}, {"benchmarks", nlohmann::json::array()}}).dump(2) + "\n";
-  write_text_atomically(complete ? gbench_path : gbench_partial, gbench);
+  write_text_atomically(complete ? files.gbench : files.gbench_partial, gbench);
   if (!complete) {
-    write_results(partial_path, "bokehbench." + s.name, context, doc);
+    write_results(files.partial_json, "bokehbench." + s.name, context, doc);
     throw std::runtime_error(fmt::format("interrupted after {} rounds: what was measured is in {} (earlier complete "
                                          "results, if any, are untouched)",
-                                         record.round_order.size(), partial_path));
+                                         record.round_order.size(), files.partial_json));
   }
-  write_results(final_path, "bokehbench." + s.name, context, doc);
-  std::filesystem::remove(partial_path);
-  std::filesystem::remove(gbench_partial);
+  write_results(files.final_json, "bokehbench." + s.name, context, doc);
+  std::filesystem::remove(files.partial_json);
+  std::filesystem::remove(files.gbench_partial);
   if (s.summary) s.summary(doc);
-  fmt::print("wrote {} and {} ({})\n", final_path, gbench_path,
-             duration_text(std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()));
+  fmt::print("wrote {} and {} ({})\n", files.final_json, files.gbench, duration_text(elapsed_s()));
   if (s.plot && !s.plot_script.empty())
-    run_plot_script(s.plot_script, final_path, (std::filesystem::path(s.plots_dir) / s.name).string());
+    run_plot_script(s.plot_script, files.final_json, (std::filesystem::path(s.plots_dir) / s.name).string());
   return doc;
 }
 
