@@ -344,9 +344,8 @@ int measure(std::vector<Pairing>& pairings, const std::vector<std::size_t>& chos
   return rounds;
 }
 
-}  // namespace
-
-compare::Report run(const Options& o) {
+// Options a run cannot work with, refused before any build starts.
+void check(const Options& o) {
   if (!(o.rule.threshold > 0)) throw std::invalid_argument("the threshold must be > 0");
   if (o.max_pairs < o.rule.min_samples) throw std::invalid_argument("--max-pairs must be at least --min-pairs");
   if (compare::signed_rank_critical(o.rule.min_samples, o.rule.confidence) < 0) {
@@ -357,13 +356,10 @@ compare::Report run(const Options& o) {
   }
   if (o.times != "auto" && o.times != "wall" && o.times != "cpu")
     throw std::invalid_argument("--times is auto, wall or cpu, not '" + o.times + "'");
-  std::signal(SIGPIPE, SIG_IGN);  // a worker that died is reported from its exit status, not by SIGPIPE
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> args = o.sweep;
-  args.insert(args.end(), {"--serve", "--no-plot"});
-  auto workers = std::make_unique<Workers>(o, args);
-  const json* hello = workers->hello;
+}
 
+// The report's header: both builds, the machine, and what the run is (a test, when injected).
+compare::Report describe_builds(const json hello[2], const Workers& workers, const Options& o) {
   compare::Report report;
   report.design = "paired";
   const auto commit = [](const json& h) { return h["context"].value("git_commit", std::string("?")); };
@@ -374,7 +370,7 @@ compare::Report run(const Options& o) {
   report.options.normalise = "none";
   for (int side = 0; side < 2; ++side)
     if (hello[side].value("protocol", 0) != kProtocol)
-      report.mismatches.push_back(fmt::format("the {} build speaks protocol {}, this one {}", workers->side[side].role(),
+      report.mismatches.push_back(fmt::format("the {} build speaks protocol {}, this one {}", workers.side[side].role(),
                                               hello[side].value("protocol", 0), kProtocol));
   if (!report.mismatches.empty()) return report;
   const json& context = hello[1]["context"];
@@ -394,8 +390,13 @@ compare::Report run(const Options& o) {
                                        o.inject_points.empty() ? std::string("every point")
                                                                : fmt::format("{}", fmt::join(o.inject_points, ", ")),
                                        1 + o.inject_slowdown_pct / 100));
+  return report;
+}
 
-  // The points both builds can measure, in the baseline's order; the rest are named in notes.
+// The points both builds can measure, in the baseline's order; the rest are named in notes.
+std::vector<Pairing> pair_points(const json hello[2], const Workers& workers, const Options& o, compare::Report& report) {
+  const json& device = hello[1]["context"]["device"];
+  const bool software = device.is_null() || device.value("type", std::string()) == "cpu";
   std::map<std::string, std::size_t> candidate_index;
   for (std::size_t i = 0; i < hello[1]["points"].size(); ++i) candidate_index[hello[1]["points"][i]["id"]] = i;
   std::vector<Pairing> pairings;
@@ -413,7 +414,7 @@ compare::Report run(const Options& o) {
     const std::string skip[2] = {bp["skip"], cp["skip"]};
     if (!skip[0].empty() || !skip[1].empty()) {
       const int k = skip[0].empty() ? 1 : 0;
-      report.notes.push_back(fmt::format("not compared, the {} skips it ({}): {}", workers->side[k].role(), skip[k], id));
+      report.notes.push_back(fmt::format("not compared, the {} skips it ({}): {}", workers.side[k].role(), skip[k], id));
       continue;
     }
     Pairing p;
@@ -434,10 +435,65 @@ compare::Report run(const Options& o) {
   for (const auto& wanted : o.inject_points)
     if (std::none_of(pairings.begin(), pairings.end(), [&](const Pairing& p) { return p.id == wanted; }))
       throw std::invalid_argument("--inject-point: no point '" + wanted + "' both builds measure");
-  if (pairings.empty()) {
-    report.mismatches.push_back("no point that both builds measure");
-    return report;
+  if (pairings.empty()) report.mismatches.push_back("no point that both builds measure");
+
+  return pairings;
+}
+
+// Each pairing's verdict; `first`: the first pass's, for the points measured again (`flagged`).
+void add_verdicts(compare::Report& report, const std::vector<Pairing>& pairings,
+                  const std::vector<compare::Judgement>& first, const std::vector<std::size_t>& flagged,
+                  const Options& o) {
+  for (std::size_t k = 0; k < pairings.size(); ++k) {
+    const Pairing& p = pairings[k];
+    if (!p.skipped.empty()) {
+      report.notes.push_back(fmt::format("not compared: {}: {}", p.id, p.skipped));
+      continue;
+    }
+    compare::PointComparison pc;
+    pc.id = p.id;
+    pc.times = fmt::format("{} time, paired", p.clock);
+    pc.judgement = compare::judge_paired(p.compared(0), p.compared(1), o.rule);
+    const bool measured_again = std::find(flagged.begin(), flagged.end(), k) != flagged.end() && o.confirm;
+    if (measured_again) {
+      pc.times += ", measured again";
+      const auto& ci = first[k].interval;
+      const std::string before = fmt::format("first pass slower, [{:.3f}, {:.3f}]", ci.low, ci.high);
+      pc.judgement.why = pc.judgement.verdict == compare::Verdict::slower
+                             ? before + "; slower again with fresh processes"
+                             : before + "; not again with fresh processes" +
+                                   (pc.judgement.why.empty() ? "" : " (" + pc.judgement.why + ")");
+    }
+    const auto estimate = [&](const std::vector<double>* v) {
+      return v[0].empty() ? 0.0 : compare::judge_paired(v[0], v[1], o.rule).ratio_of_medians;
+    };
+    pc.raw_wall_ratio = estimate(p.wall_ms);
+    pc.raw_cpu_ratio = estimate(p.cpu_ms);
+    pc.baseline_samples = static_cast<int>(p.wall_ms[0].size());
+    pc.current_samples = static_cast<int>(p.wall_ms[1].size());
+    pc.baseline_median_ms = runner::quantile(p.wall_ms[0], 0.5);
+    pc.current_median_ms = runner::quantile(p.wall_ms[1], 0.5);
+    pc.work_changes = compare::json_differences(p.work[0], p.work[1]);
+    pc.paired_baseline_ms = p.compared(0);
+    pc.paired_current_ms = p.compared(1);
+    report.points.push_back(std::move(pc));
   }
+}
+
+}  // namespace
+
+compare::Report run(const Options& o) {
+  check(o);
+  std::signal(SIGPIPE, SIG_IGN);  // a worker that died is reported from its exit status, not by SIGPIPE
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> args = o.sweep;
+  args.insert(args.end(), {"--serve", "--no-plot"});
+  auto workers = std::make_unique<Workers>(o, args);
+  const json* hello = workers->hello;
+  compare::Report report = describe_builds(hello, *workers, o);
+  if (!report.mismatches.empty()) return report;
+  std::vector<Pairing> pairings = pair_points(hello, *workers, o, report);
+  if (!report.mismatches.empty()) return report;
 
   std::mt19937_64 rng(o.seed);
   runner::InterruptScope interrupts;
@@ -475,40 +531,7 @@ compare::Report run(const Options& o) {
   if (runner::interrupted())
     report.notes.push_back(fmt::format("interrupted: points with fewer than {} pairs are inconclusive", o.rule.min_samples));
 
-  for (std::size_t k = 0; k < pairings.size(); ++k) {
-    const Pairing& p = pairings[k];
-    if (!p.skipped.empty()) {
-      report.notes.push_back(fmt::format("not compared: {}: {}", p.id, p.skipped));
-      continue;
-    }
-    compare::PointComparison pc;
-    pc.id = p.id;
-    pc.times = fmt::format("{} time, paired", p.clock);
-    pc.judgement = compare::judge_paired(p.compared(0), p.compared(1), o.rule);
-    const bool measured_again = std::find(flagged.begin(), flagged.end(), k) != flagged.end() && o.confirm;
-    if (measured_again) {
-      pc.times += ", measured again";
-      const auto& ci = first[k].interval;
-      const std::string before = fmt::format("first pass slower, [{:.3f}, {:.3f}]", ci.low, ci.high);
-      pc.judgement.why = pc.judgement.verdict == compare::Verdict::slower
-                             ? before + "; slower again with fresh processes"
-                             : before + "; not again with fresh processes" +
-                                   (pc.judgement.why.empty() ? "" : " (" + pc.judgement.why + ")");
-    }
-    const auto estimate = [&](const std::vector<double>* v) {
-      return v[0].empty() ? 0.0 : compare::judge_paired(v[0], v[1], o.rule).ratio_of_medians;
-    };
-    pc.raw_wall_ratio = estimate(p.wall_ms);
-    pc.raw_cpu_ratio = estimate(p.cpu_ms);
-    pc.baseline_samples = static_cast<int>(p.wall_ms[0].size());
-    pc.current_samples = static_cast<int>(p.wall_ms[1].size());
-    pc.baseline_median_ms = runner::quantile(p.wall_ms[0], 0.5);
-    pc.current_median_ms = runner::quantile(p.wall_ms[1], 0.5);
-    pc.work_changes = compare::json_differences(p.work[0], p.work[1]);
-    pc.paired_baseline_ms = p.compared(0);
-    pc.paired_current_ms = p.compared(1);
-    report.points.push_back(std::move(pc));
-  }
+  add_verdicts(report, pairings, first, flagged, o);
   return report;
 }
 
