@@ -147,12 +147,8 @@ void adaptive(AdaptiveOptions& o) {
   if (axes.option_values.count(kOption))
     throw std::invalid_argument("--adaptive: this command measures every method both ways; leave it out");
   axes.sweep_choices = {kOption};
-  std::vector<SweepPoint> points;
-  for (double coc : o.max_coc_px) {
-    if (!(coc > 0)) throw std::invalid_argument(fmt::format("--max-coc {} must be a number of pixels > 0", coc));
-    axes.max_coc_px = coc;
-    for (auto& p : expand(axes)) points.push_back(std::move(p));
-  }
+  axes.max_coc_px = o.max_coc_px;
+  const std::vector<SweepPoint> points = expand(axes);
 
   SweepSettings s = o.sweep.settings("adaptive", "plot_adaptive.py");
   s.config = {{"scenes", axes.scenes},

@@ -30,6 +30,7 @@
 #include "parallel.hpp"
 #include "report.hpp"
 #include "run.hpp"
+#include "sweep.hpp"
 
 namespace bokeh {
 
@@ -373,110 +374,106 @@ void stability(StabilityOptions& o) {
   o.axes.resolve();
   const auto start = std::chrono::steady_clock::now();
   check_writable_file(o.out_path);
-  std::vector<const Method*> methods;
+  // Every method x backend x precision it accepts, at the nominal pattern (the runner's product).
+  Axes product;
   if (o.axes.methods.empty())
-    for (const Method& m : registered_methods()) methods.push_back(&m);
+    for (const Method& m : registered_methods()) product.methods.push_back(m.name);
   else
-    for (const auto& name : o.axes.methods) methods.push_back(&find_method(name));
+    product.methods = o.axes.methods;
+  product.backends = o.axes.backends;
+  product.precisions = {"all"};
+  product.patterns = {pattern_for(4)};
+  const std::vector<SweepPoint> configurations_to_run = expand(product);
   const int threads = o.cpu_threads > 0 ? o.cpu_threads : default_cpu_threads();
   std::optional<vk::Context> ctx;
-  if (std::find(o.axes.backends.begin(), o.axes.backends.end(), "gpu") != o.axes.backends.end()) {
-    vk::DeviceRequirements wanted;
-    for (const Method* m : methods)
-      for (const auto& p : m->precisions) {
-        FilterOptions opts = m->defaults(pattern_for(4));
-        opts.precision = p;
-        wanted.add(m->needs(opts));
-      }
-    ctx.emplace(o.device, wanted);
-  }
+  if (const auto wanted = gpu_requirements(configurations_to_run)) ctx.emplace(o.device, *wanted);
   const std::vector<Case> cases = make_cases(o.quick);
-  fmt::print("stability: {} methods, {} cases each, backends {}, device {}\n", methods.size(), cases.size(),
+  fmt::print("stability: {} methods, {} cases each, backends {}, device {}\n", product.methods.size(), cases.size(),
              fmt::join(o.axes.backends, " "), ctx ? ctx->info().name : "none");
 
   nlohmann::json configurations = nlohmann::json::array();
-  for (const Method* m : methods)
-    for (const auto& precision : m->precisions)
-      for (const auto& backend : o.axes.backends) {
-        FilterOptions base = m->defaults(pattern_for(4));
-        base.precision = precision;
-        vk::Context* device = backend == "gpu" ? &*ctx : nullptr;
-        nlohmann::json config = {{"method", m->name}, {"precision", precision}, {"backend", backend}};
-        const double limit = m->input_limit ? m->input_limit(base) : static_cast<double>(kFloatMax);
-        config["input_limit"] = limit;
-        if (device)
-          if (std::string missing = device->unmet(m->needs(base)); !missing.empty()) {
-            config["skipped"] = fmt::format("{} needs {}, which {} lacks", m->name, missing, device->info().name);
-            fmt::print("  {:<12} {:<18} {:<4} skipped: {}\n", m->name, precision, backend, config["skipped"].get<std::string>());
-            configurations.push_back(config);
-            continue;
-          }
-        config["skipped"] = nullptr;
-        std::vector<Outcome> outcomes(cases.size());
-        // The I = 1 outputs first: the linearity reference of each intensity axis.
-        std::map<std::string, Image> unit;
-        for (std::size_t i = 0; i < cases.size(); ++i)
-          if (cases[i].check_linearity && cases[i].nominal) {
-            outcomes[i] = run_case(cases[i], *m, base, device, threads, nullptr);
-            unit[cases[i].axis] = outcomes[i].output;
-          }
-        for (std::size_t i = 0; i < cases.size(); ++i) {
-          if (cases[i].check_linearity && cases[i].nominal) continue;
-          const auto u = unit.find(cases[i].axis);
-          outcomes[i] = run_case(cases[i], *m, base, device, threads,
-                                 u != unit.end() && !u->second.pixels.empty() ? &u->second : nullptr);
-        }
-        nlohmann::json case_json = nlohmann::json::array(), ranges = nlohmann::json::object();
-        nlohmann::json first_failure = nullptr;
-        bool limit_holds = true;
-        for (std::size_t i = 0; i < cases.size(); ++i) {
-          const Case& c = cases[i];
-          const Outcome& out = outcomes[i];
-          case_json.push_back({{"axis", c.axis},
-                               {"label", c.label},
-                               {"value", value_json(c.value)},
-                               {"nominal", c.nominal},
-                               {"width_px", c.width_px},
-                               {"height_px", c.height_px},
-                               {"N", c.pattern.size_n},
-                               {"k", c.pattern.spacing_px},
-                               {"status", out.status},
-                               {"kind", out.kind.empty() ? nlohmann::json(nullptr) : nlohmann::json(out.kind)},
-                               {"detail", out.detail},
-                               {"disc_ok", out.disc_ok ? nlohmann::json(*out.disc_ok) : nlohmann::json(nullptr)},
-                               {"disc_detail", out.disc_detail},
-                               {"measured", out.measured},
-                               {"bounds", out.bounds}});
-          if (out.status == "fail" && first_failure.is_null())
-            first_failure = {{"axis", c.axis}, {"label", c.label}, {"kind", out.kind}, {"detail", out.detail}};
-          // The declared input limit: no overflow or saturation at or below it.
-          if (c.axis.rfind("intensity", 0) == 0 && c.intensity <= limit &&
-              (out.kind == "nan" || out.kind == "inf" || out.kind == "saturation"))
-            limit_holds = false;
-        }
-        for (const auto& axis : kAxes) {
-          std::vector<const Case*> axis_cases;
-          std::vector<const Outcome*> axis_outcomes;
-          for (std::size_t i = 0; i < cases.size(); ++i)
-            if (cases[i].axis == axis) axis_cases.push_back(&cases[i]), axis_outcomes.push_back(&outcomes[i]);
-          ranges[axis] = safe_range_json(axis_cases, axis_outcomes);
-          if (axis == "radius") ranges["disc"] = safe_range_json(axis_cases, axis_outcomes, /*disc=*/true);
-        }
-        config["input_limit_holds"] = limit_holds;
-        config["cases"] = case_json;
-        config["safe_ranges"] = ranges;
-        config["first_failure"] = first_failure;
-        std::string line = fmt::format("  {:<12} {:<18} {:<4}", m->name, precision, backend);
-        for (const auto& axis : kAxes) line += fmt::format(" {:<16}", range_text(ranges[axis]));
-        line += fmt::format(" {:<10}", range_text(ranges["disc"]));
-        fmt::print("{} {}\n", line,
-                   first_failure.is_null()
-                       ? std::string("no failure")
-                       : fmt::format("first failure: {} {} ({})", first_failure["axis"].get<std::string>(),
-                                     first_failure["label"].get<std::string>(), first_failure["kind"].get<std::string>()));
-        std::fflush(stdout);
+  for (const SweepPoint& point : configurations_to_run) {
+    const Method* m = point.method;
+    const std::string& precision = point.options.precision;
+    const std::string& backend = point.backend;
+    const FilterOptions& base = point.options;
+    vk::Context* device = backend == "gpu" ? &*ctx : nullptr;
+    nlohmann::json config = {{"method", m->name}, {"precision", precision}, {"backend", backend}};
+    const double limit = m->input_limit ? m->input_limit(base) : static_cast<double>(kFloatMax);
+    config["input_limit"] = limit;
+    if (device)
+      if (std::string missing = device->unmet(m->needs(base)); !missing.empty()) {
+        config["skipped"] = fmt::format("{} needs {}, which {} lacks", m->name, missing, device->info().name);
+        fmt::print("  {:<12} {:<18} {:<4} skipped: {}\n", m->name, precision, backend, config["skipped"].get<std::string>());
         configurations.push_back(config);
+        continue;
       }
+    config["skipped"] = nullptr;
+    std::vector<Outcome> outcomes(cases.size());
+    // The I = 1 outputs first: the linearity reference of each intensity axis.
+    std::map<std::string, Image> unit;
+    for (std::size_t i = 0; i < cases.size(); ++i)
+      if (cases[i].check_linearity && cases[i].nominal) {
+        outcomes[i] = run_case(cases[i], *m, base, device, threads, nullptr);
+        unit[cases[i].axis] = outcomes[i].output;
+      }
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      if (cases[i].check_linearity && cases[i].nominal) continue;
+      const auto u = unit.find(cases[i].axis);
+      outcomes[i] = run_case(cases[i], *m, base, device, threads,
+                             u != unit.end() && !u->second.pixels.empty() ? &u->second : nullptr);
+    }
+    nlohmann::json case_json = nlohmann::json::array(), ranges = nlohmann::json::object();
+    nlohmann::json first_failure = nullptr;
+    bool limit_holds = true;
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const Case& c = cases[i];
+      const Outcome& out = outcomes[i];
+      case_json.push_back({{"axis", c.axis},
+                           {"label", c.label},
+                           {"value", value_json(c.value)},
+                           {"nominal", c.nominal},
+                           {"width_px", c.width_px},
+                           {"height_px", c.height_px},
+                           {"N", c.pattern.size_n},
+                           {"k", c.pattern.spacing_px},
+                           {"status", out.status},
+                           {"kind", out.kind.empty() ? nlohmann::json(nullptr) : nlohmann::json(out.kind)},
+                           {"detail", out.detail},
+                           {"disc_ok", out.disc_ok ? nlohmann::json(*out.disc_ok) : nlohmann::json(nullptr)},
+                           {"disc_detail", out.disc_detail},
+                           {"measured", out.measured},
+                           {"bounds", out.bounds}});
+      if (out.status == "fail" && first_failure.is_null())
+        first_failure = {{"axis", c.axis}, {"label", c.label}, {"kind", out.kind}, {"detail", out.detail}};
+      // The declared input limit: no overflow or saturation at or below it.
+      if (c.axis.rfind("intensity", 0) == 0 && c.intensity <= limit &&
+          (out.kind == "nan" || out.kind == "inf" || out.kind == "saturation"))
+        limit_holds = false;
+    }
+    for (const auto& axis : kAxes) {
+      std::vector<const Case*> axis_cases;
+      std::vector<const Outcome*> axis_outcomes;
+      for (std::size_t i = 0; i < cases.size(); ++i)
+        if (cases[i].axis == axis) axis_cases.push_back(&cases[i]), axis_outcomes.push_back(&outcomes[i]);
+      ranges[axis] = safe_range_json(axis_cases, axis_outcomes);
+      if (axis == "radius") ranges["disc"] = safe_range_json(axis_cases, axis_outcomes, /*disc=*/true);
+    }
+    config["input_limit_holds"] = limit_holds;
+    config["cases"] = case_json;
+    config["safe_ranges"] = ranges;
+    config["first_failure"] = first_failure;
+    std::string line = fmt::format("  {:<12} {:<18} {:<4}", m->name, precision, backend);
+    for (const auto& axis : kAxes) line += fmt::format(" {:<16}", range_text(ranges[axis]));
+    line += fmt::format(" {:<10}", range_text(ranges["disc"]));
+    fmt::print("{} {}\n", line,
+               first_failure.is_null()
+                   ? std::string("no failure")
+                   : fmt::format("first failure: {} {} ({})", first_failure["axis"].get<std::string>(),
+                                 first_failure["label"].get<std::string>(), first_failure["kind"].get<std::string>()));
+    std::fflush(stdout);
+    configurations.push_back(config);
+  }
 
   nlohmann::json axes = nlohmann::json::object();
   for (const auto& axis : kAxes) {

@@ -50,7 +50,7 @@ void tradeoff(TradeoffOptions& o) {
   axes.scales = {0};
   axes.option_values = o.method_options.values_for(axes.methods);
   axes.sweep_options = true;
-  axes.max_coc_px = o.max_coc_px;
+  axes.max_coc_px = {o.max_coc_px};
 
   SweepSettings s = o.sweep.settings("tradeoff", "plot_tradeoff.py");
   s.config = {{"scene", axes.scenes.front()},

@@ -117,40 +117,57 @@ std::string point_id(const SweepPoint& p) {
 
 std::vector<SweepPoint> expand(const Axes& axes) {
   std::vector<SweepPoint> points;
-  for (const auto& scene : axes.scenes)
-    for (const auto& res : axes.resolutions)
-      for (const auto& name : axes.methods) {
-        const Method& m = find_method(name);
-        std::vector<std::string> precisions =
-            axes.precisions.empty() ? std::vector<std::string>{m.precisions.front()}
-            : axes.precisions == std::vector<std::string>{"all"} ? m.precisions
-                                                                 : accepted(axes.precisions, m.precisions, m.precisions.front());
-        std::vector<int> scales = axes.scales.empty()                ? std::vector<int>{1}
-                                  : axes.scales == std::vector<int>{0} ? m.buffer_scales
-                                                                       : accepted(axes.scales, m.buffer_scales, 1);
-        for (const auto& backend : axes.backends)
-          for (const auto& precision : precisions)
-            for (int scale : scales)
-              for (const auto& values : option_sets(m, axes)) {
-                std::set<float> radii;  // methods that only see the largest radius: one point per radius
-                for (const auto& pattern : axes.patterns) {
-                  if (!m.samples_pattern && !radii.insert(pattern.max_radius_px()).second) continue;
-                  SweepPoint p;
-                  p.method = &m;
-                  p.backend = backend;
-                  p.scene = scene;
-                  p.resolution = res;
-                  p.options = m.defaults(pattern);
-                  p.options.precision = precision;
-                  p.options.buffer_scale = scale;
-                  p.options.values = values;
-                  p.max_coc_px = axes.max_coc_px.value_or(pattern.max_radius_px());
-                  p.id = point_id(p);
-                  points.push_back(std::move(p));
+  const std::vector<std::optional<double>> cocs =
+      axes.max_coc_px.empty() ? std::vector<std::optional<double>>{std::nullopt}
+                              : std::vector<std::optional<double>>(axes.max_coc_px.begin(), axes.max_coc_px.end());
+  for (const auto& coc : cocs) {
+    if (coc && !(*coc > 0 && std::isfinite(*coc)))
+      throw std::invalid_argument(fmt::format("--max-coc {} must be a number of pixels > 0", *coc));
+    for (const auto& scene : axes.scenes)
+      for (const auto& res : axes.resolutions)
+        for (const auto& name : axes.methods) {
+          const Method& m = find_method(name);
+          std::vector<std::string> precisions =
+              axes.precisions.empty() ? std::vector<std::string>{m.precisions.front()}
+              : axes.precisions == std::vector<std::string>{"all"} ? m.precisions
+                                                                   : accepted(axes.precisions, m.precisions, m.precisions.front());
+          std::vector<int> scales = axes.scales.empty()                ? std::vector<int>{1}
+                                    : axes.scales == std::vector<int>{0} ? m.buffer_scales
+                                                                         : accepted(axes.scales, m.buffer_scales, 1);
+          for (const auto& backend : axes.backends)
+            for (const auto& precision : precisions)
+              for (int scale : scales)
+                for (const auto& values : option_sets(m, axes)) {
+                  std::set<float> radii;  // methods that only see the largest radius: one point per radius
+                  for (const auto& pattern : axes.patterns) {
+                    if (!m.samples_pattern && !radii.insert(pattern.max_radius_px()).second) continue;
+                    SweepPoint p;
+                    p.method = &m;
+                    p.backend = backend;
+                    p.scene = scene;
+                    p.resolution = res;
+                    p.options = m.defaults(pattern);
+                    p.options.precision = precision;
+                    p.options.buffer_scale = scale;
+                    p.options.values = values;
+                    p.max_coc_px = coc.value_or(pattern.max_radius_px());
+                    p.id = point_id(p);
+                    points.push_back(std::move(p));
+                  }
                 }
-              }
-      }
+        }
+  }
   return points;
+}
+
+std::optional<vk::DeviceRequirements> gpu_requirements(const std::vector<SweepPoint>& points) {
+  std::optional<vk::DeviceRequirements> wanted;
+  for (const auto& p : points)
+    if (p.backend == "gpu") {
+      if (!wanted) wanted.emplace();
+      wanted->add(p.method->needs(p.options));
+    }
+  return wanted;
 }
 
 namespace {

@@ -47,9 +47,9 @@ struct Axes {
   // Options (by key) swept over every one of their choices where a method has them as an
   // enumeration and option_values does not fix them (adaptive: off and on).
   std::vector<std::string> sweep_choices;
-  // The scene's largest CoC radius: unset = the pattern's max radius (the lens follows N, as in
-  // figure9), else this many px for every point.
-  std::optional<double> max_coc_px;  // a point id names it (/coc:R) when it differs from the pattern's
+  // The scene's largest CoC radius: empty = the pattern's max radius (the lens follows N, as in
+  // figure9), else each of these many px (an axis, outermost).
+  std::vector<double> max_coc_px;  // a point id names it (/coc:R) when it differs from the pattern's
 };
 
 struct SweepPoint {
@@ -63,6 +63,8 @@ struct SweepPoint {
 };
 
 std::vector<SweepPoint> expand(const Axes& axes);
+// What the points that run on the GPU need of a device, all together (nullopt: none runs there).
+std::optional<vk::DeviceRequirements> gpu_requirements(const std::vector<SweepPoint>& points);
 
 struct SweepSettings {
   std::string name;  // results/<name>.json, results/<name>_gbench.json, plots/<name>.png

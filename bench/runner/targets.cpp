@@ -64,11 +64,7 @@ nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
 SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::string& device, int cpu_threads,
                            double max_buffer_mb)
     : points_(points), threads_(cpu_threads > 0 ? cpu_threads : default_cpu_threads()), plans_(points.size()) {
-  vk::DeviceRequirements wanted;
-  bool any_gpu = false;
-  for (const auto& p : points)
-    if (p.backend == "gpu") wanted.add(p.method->needs(p.options)), any_gpu = true;
-  if (any_gpu) ctx_.emplace(device, wanted);
+  if (const auto wanted = gpu_requirements(points)) ctx_.emplace(device, *wanted);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const SweepPoint& p = points[i];
     const Method& m = *p.method;

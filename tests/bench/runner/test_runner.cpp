@@ -404,8 +404,16 @@ TEST(Axes, MaxCocFollowsThePatternUnlessFixed) {
   auto points = expand(axes);
   EXPECT_EQ(points[0].max_coc_px, 8);
   EXPECT_EQ(points[1].max_coc_px, 20);
-  axes.max_coc_px = 12;
+  axes.max_coc_px = {12};
   for (const auto& p : expand(axes)) EXPECT_EQ(p.max_coc_px, 12);
+  // Several radii: an axis of the product, outermost.
+  axes.max_coc_px = {4, 12};
+  points = expand(axes);
+  ASSERT_EQ(points.size(), 4u);
+  EXPECT_EQ(points[1].max_coc_px, 4);
+  EXPECT_EQ(points[2].max_coc_px, 12);
+  axes.max_coc_px = {0};
+  EXPECT_THROW(expand(axes), std::invalid_argument);
 }
 
 }  // namespace
