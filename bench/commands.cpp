@@ -180,21 +180,10 @@ void AxisFlags::resolve(SweepFlags* sweep) {
 std::vector<GatherPattern> AxisFlags::patterns() const {
   std::vector<GatherPattern> out;
   for (const auto& text : sizes) {
-    if (text.find('x') != std::string::npos) {
-      out.push_back(parse_pattern(text));
-      continue;
-    }
-    std::size_t used = 0;
-    int n = 0;
-    try {
-      n = std::stoi(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != text.size())
+    const bool plain_n = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (!plain_n && text.find('x') == std::string::npos)
       throw std::invalid_argument(fmt::format("--sizes '{}' is not a gather size N or a pattern NxK", text));
-    out.push_back({n, spacing_px});
-    validate(out.back());
+    out.push_back(parse_pattern(plain_n ? fmt::format("{}x{}", text, spacing_px) : text));  // validated
   }
   return out;
 }
