@@ -1,35 +1,64 @@
+// What both image back-ends share (the back-end itself: image_io_oiio.cpp or image_io_lean.cpp).
 #include "image_io.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imageio.h>
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imagebufalgo.h>
 #include <fmt/format.h>
+
+#include "image_backend.hpp"
 
 namespace bokeh {
 
-ImageFileInfo read_image_info(const std::string& path) {
-  auto input = OIIO::ImageInput::open(path);
-  if (!input) throw std::runtime_error(fmt::format("cannot read image '{}': {}", path, OIIO::geterror()));
-  const OIIO::ImageSpec& spec = input->spec();
-  ImageFileInfo info;
-  info.width = spec.width;
-  info.height = spec.height;
-  info.channels = spec.nchannels;
-  info.pixel_type = spec.format.c_str();
-  info.is_float = spec.format.is_floating_point();
-  return info;
+namespace image_backend {
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
 }
 
+}  // namespace image_backend
+
+namespace {
+
+void check_writable_shape(const Image& image, const std::string& path) {
+  // Checked before any back-end opens the file (OpenImageIO would leave it empty).
+  if (image_backend::lower_extension(path) == ".png" && image.channels > 4)
+    throw std::invalid_argument(
+        fmt::format("cannot write image '{}': PNG holds 1 to 4 channels, not {}", path, image.channels));
+  if (image.width < 1 || image.height < 1 || image.channels < 1)
+    throw std::invalid_argument(fmt::format("cannot write image '{}': it is empty ({}x{} pixels, {} channels)", path,
+                                            image.width, image.height, image.channels));
+  if (image.pixels.size() != image.pixel_count() * static_cast<std::size_t>(image.channels))
+    throw std::invalid_argument(fmt::format("cannot write image '{}': {} values for {}x{} pixels of {} channels", path,
+                                            image.pixels.size(), image.width, image.height, image.channels));
+}
+
+// encoded_channels: how many leading channels go through encode_srgb (the rest, alpha, are stored as is).
+std::vector<std::uint8_t> to_8bit(const Image& image, int encoded_channels) {
+  std::vector<std::uint8_t> bytes(image.pixels.size());
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    const float v = image.pixels[i];
+    const bool encode = static_cast<int>(i % static_cast<std::size_t>(image.channels)) < encoded_channels;
+    bytes[i] = quantize_unit_to_8bit(encode ? static_cast<float>(encode_srgb(v)) : v);
+  }
+  return bytes;
+}
+
+}  // namespace
+
+ImageFileInfo read_image_info(const std::string& path) { return image_backend::read_info(path); }
+
 void check_image_extension(const std::string& path) {
-  const std::string ext = OIIO::Strutil::lower(OIIO::Filesystem::extension(path));
+  const std::string ext = image_backend::lower_extension(path);
   if (ext != ".exr" && ext != ".png")
-    throw std::invalid_argument(fmt::format(
-        "output '{}': the extension must be .exr (linear float) or .png (tone-mapped 8-bit sRGB), not '{}'", path,
-        ext.empty() ? "(none)" : ext));
+    throw std::invalid_argument(
+        fmt::format("output '{}': the extension must be .exr (linear float) or .png (tone-mapped 8-bit sRGB), not '{}'",
+                    path, ext.empty() ? "(none)" : ext));
 }
 
 Image read_image(const std::string& path, int channels, const std::string& what, bool float_only) {
@@ -41,16 +70,14 @@ Image read_image(const std::string& path, int channels, const std::string& what,
           "pixels would be read as fractions 0..1",
           what, path, info.pixel_type, what));
   }
-  OIIO::ImageBuf buf(path);
-  if (!buf.read(0, 0, true, OIIO::TypeDesc::FLOAT))
-    throw std::runtime_error(fmt::format("cannot read {} '{}': {}", what, path, buf.geterror()));
-  const auto& spec = buf.spec();
-  if (spec.nchannels < channels)
-    throw std::runtime_error(fmt::format("{} '{}' has {} channels, need {}", what, path, spec.nchannels, channels));
-  Image img(spec.width, spec.height, channels);
-  OIIO::ROI roi(spec.x, spec.x + spec.width, spec.y, spec.y + spec.height, 0, 1, 0, channels);
-  if (!buf.get_pixels(roi, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-    throw std::runtime_error(fmt::format("cannot read pixels of '{}': {}", path, buf.geterror()));
+  Image all = image_backend::read(path, what);
+  if (all.channels < channels)
+    throw std::runtime_error(fmt::format("{} '{}' has {} channels, need {}", what, path, all.channels, channels));
+  if (all.channels == channels) return all;
+  Image img(all.width, all.height, channels);
+  for (std::size_t p = 0; p < img.pixel_count(); ++p)
+    std::copy_n(all.pixels.begin() + static_cast<std::ptrdiff_t>(p * all.channels), channels,
+                img.pixels.begin() + static_cast<std::ptrdiff_t>(p * channels));
   return img;
 }
 
@@ -68,24 +95,44 @@ Image tone_map_for_display(const Image& linear) {
   return out;
 }
 
+double encode_srgb(double linear) {
+  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
+unsigned char quantize_unit_to_8bit(float value) {
+  const float unit = value > 0.0f ? std::min(value, 1.0f) : 0.0f;  // NaN fails the test: 0
+  return static_cast<unsigned char>(unit * 255.0f + 0.5f);
+}
+
 void write_image(const Image& image, const std::string& path) {
   check_image_extension(path);
-  const bool linear_file = OIIO::Strutil::lower(OIIO::Filesystem::extension(path)) == ".exr";
-  const Image& src = linear_file ? image : tone_map_for_display(image);
-  OIIO::ImageSpec spec(src.width, src.height, src.channels, OIIO::TypeDesc::FLOAT);
-  OIIO::ImageBuf buf(spec, const_cast<float*>(src.pixels.data()));
-  OIIO::ImageBuf to_write = buf;
-  if (!linear_file) {
-    if (!OIIO::ImageBufAlgo::colorconvert(to_write, buf, "linear", "sRGB"))
-      throw std::runtime_error(fmt::format("colour conversion for '{}' failed: {}", path, OIIO::geterror()));
-    to_write.set_write_format(OIIO::TypeDesc::UINT8);
-  } else {
-    to_write.set_write_format(OIIO::TypeDesc::FLOAT);
+  check_writable_shape(image, path);
+  if (image_backend::lower_extension(path) == ".exr") {
+    image_backend::write_exr_float(image, path);
+    return;
   }
-  if (!to_write.write(path)) {
-    const std::string why = to_write.geterror();
-    throw std::runtime_error(fmt::format("cannot write image '{}': {}", path, why.empty() ? OIIO::geterror() : why));
-  }
+  // Colour channels are encoded; a fourth (alpha) is stored as is, as OpenImageIO's colour conversion did.
+  const std::vector<std::uint8_t> bytes = to_8bit(tone_map_for_display(image), std::min(3, image.channels));
+  image_backend::write_8bit(bytes, image.width, image.height, image.channels, path, /*srgb_tagged=*/true);
 }
+
+void write_display_image(const Image& display_srgb, const std::string& path) {
+  check_writable_shape(display_srgb, path);
+  if (image_backend::lower_extension(path) == ".exr") {
+    image_backend::write_exr_float(display_srgb, path);
+    return;
+  }
+  image_backend::write_8bit(to_8bit(display_srgb, 0), display_srgb.width, display_srgb.height, display_srgb.channels,
+                            path, /*srgb_tagged=*/false);
+}
+
+bool draw_text(Image& rgb, int x_px, int baseline_y_px, const std::string& text, int size_px,
+               const std::array<float, 3>& colour) {
+  if (rgb.channels != 3 || rgb.pixels.size() != rgb.pixel_count() * 3)
+    throw std::invalid_argument(fmt::format("draw_text: the image has {} channels, need 3", rgb.channels));
+  return image_backend::draw_text(rgb, x_px, baseline_y_px, text, size_px, colour);
+}
+
+ImageIoBackend image_io_backend() { return image_backend::describe(); }
 
 }  // namespace bokeh

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "image.hpp"
+#include "image_io.hpp"  // write_display_image, for the display images below
 
 namespace bokeh {
 
@@ -34,7 +35,7 @@ struct ErrorMetrics {
 ErrorMetrics compare_images(const Image& result, const Image& reference);
 
 // Display images below hold sRGB-encoded values in [0,1], ready to store as 8 bit without further
-// transforms (write_image would tone-map them again, so use write_display_image).
+// transforms (write_image would tone-map them again, so use write_display_image, image_io.hpp).
 
 // tone_map_for_display followed by the sRGB transfer function: what write_image puts in a PNG.
 Image to_display_srgb(const Image& linear);
@@ -45,11 +46,9 @@ Image to_display_srgb(const Image& linear);
 Image error_heat_map(const Image& result, const Image& reference);
 
 // Panels (display-encoded, 1 or 3 channels, any sizes) left to right, top-aligned, 8 px apart on a dark
-// grey sheet. Non-empty labels are drawn above their panel with OpenImageIO's text renderer (DejaVu
-// Sans); where no font can be found the label strip stays blank.
+// grey sheet. Non-empty labels are drawn above their panel (draw_text: OpenImageIO's text renderer, DejaVu
+// Sans); where no font can be found, and always with the lean image back-end (BOKEH_IMAGE_IO=lean), the
+// label strip stays blank.
 Image contact_sheet(const std::vector<std::pair<std::string, Image>>& panels);
-
-// Writes a display-encoded image as is (8 bit for PNG/JPEG), without write_image's tone map.
-void write_display_image(const Image& display_srgb, const std::string& path);
 
 }  // namespace bokeh

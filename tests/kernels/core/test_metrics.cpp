@@ -6,8 +6,6 @@
 #include <limits>
 #include <random>
 
-#include <OpenImageIO/imagebufalgo.h>
-
 #include "image_io.hpp"
 #include "metrics.hpp"
 
@@ -123,11 +121,19 @@ TEST(Metrics, ContactSheetPlacesPanelsSideBySide) {
   EXPECT_THROW(contact_sheet({}), std::invalid_argument);
 }
 
-// .ci/setup installs fonts-dejavu-core, so the labels a person reads must be drawn.
+// .ci/setup installs fonts-dejavu-core, so the labels a person reads must be drawn (by OpenImageIO; the
+// lean image back-end has no text renderer and leaves the strip blank, as the README says).
 TEST(Metrics, ContactSheetDrawsLabels) {
   const Image sheet = contact_sheet({{"reference", gray(80, 10, 0.0f)}});
   EXPECT_EQ(sheet.height, 8 + 20 + 10 + 8);
-  ASSERT_TRUE(OIIO::ImageBufAlgo::text_size("reference", 14, "DejaVuSans").defined())
+  if (image_io_backend().name == "lean") {
+    Image probe = gray(80, 20, 0.0f);
+    EXPECT_FALSE(draw_text(probe, 0, 14, "reference", 14, {1.0f, 1.0f, 1.0f}));
+    for (float v : sheet.pixels) ASSERT_LT(v, 0.5f) << "the lean back-end draws no text";
+    GTEST_SKIP() << "BOKEH_IMAGE_IO=lean draws no labels (" << image_io_backend().libraries << ")";
+  }
+  Image probe = gray(80, 20, 0.0f);
+  ASSERT_TRUE(draw_text(probe, 0, 14, "reference", 14, {1.0f, 1.0f, 1.0f}))
       << "no DejaVuSans font: install fonts-dejavu-core (as .ci/setup does), or the contact sheets lose their labels";
   float brightest = 0.0f;
   for (int y = 0; y < 28; ++y)
