@@ -11,8 +11,7 @@ namespace bokeh {
 OptionSpec adaptive_option(const std::string& help) { return {"adaptive", help, 0, 0, 0, false, {"off", "on"}}; }
 
 bool adaptive_on(const FilterOptions& options) {
-  const auto it = options.values.find("adaptive");
-  return it != options.values.end() && it->second == 1.0;
+  return options.values.contains("adaptive") && options.choice<AdaptiveMode>("adaptive") == AdaptiveMode::on;
 }
 
 OptionSpec adaptive_tile_option() {

@@ -18,6 +18,8 @@ namespace bokeh {
 // commands (`bokehbench adaptive`) find those methods through the registry. `help` says what it does
 // in that method.
 OptionSpec adaptive_option(const std::string& help);
+// Its value; the enumerators in the order of adaptive_option()'s choices.
+enum class AdaptiveMode { off, on };
 // True when `options` has adaptive = on (false without the option: e.g. sprites running naive's gather).
 bool adaptive_on(const FilterOptions& options);
 // The tile size of the tile-max CoC map, "adaptive_tile_px".

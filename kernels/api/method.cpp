@@ -58,6 +58,13 @@ double FilterOptions::number(const std::string& key) const {
   return it->second;
 }
 
+std::size_t FilterOptions::choice_index(const std::string& key) const {
+  const double value = number(key);
+  if (!(value >= 0 && value == std::floor(value)))
+    throw std::logic_error(fmt::format("option '{}' = {} is not the index of a choice", key, value));
+  return static_cast<std::size_t>(value);
+}
+
 FilterOptions Method::defaults(const GatherPattern& pattern) const {
   FilterOptions o;
   o.pattern = pattern;

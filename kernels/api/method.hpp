@@ -2,11 +2,13 @@
 // A filter method as the rest of the harness meets it: one declaration, written in the method's own
 // folder (kernels/<name>/), registered with one line in kernels/CMakeLists.txt. The CLI, the sweeps,
 // the JSON, the plots and the conformance tests read only this.
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -45,6 +47,16 @@ struct FilterOptions {
 
   double number(const std::string& key) const;  // throws std::logic_error if the method has no such option
   int integer(const std::string& key) const { return static_cast<int>(number(key)); }
+  // An enumerated option (OptionSpec::choices): the index of its choice. Throws std::logic_error if
+  // the method has no such option or the value is no index (check_options rejects those first).
+  std::size_t choice_index(const std::string& key) const;
+  // The same as the method's enum, whose enumerators are declared in the order of the choices (so a
+  // method never compares an index with a number).
+  template <class Enum>
+  Enum choice(const std::string& key) const {
+    static_assert(std::is_enum_v<Enum>, "choice<Enum>: an enum declared in the order of OptionSpec::choices");
+    return static_cast<Enum>(choice_index(key));
+  }
 };
 
 // What a CPU reference may read; the CoC pass has already run.

@@ -48,6 +48,7 @@
 #include <string>
 #include <vector>
 
+#include "circular_config.hpp"
 #include "circular_gpu.hpp"
 #include "circular_separable.hpp"
 #include "vk/spirv.hpp"
@@ -114,11 +115,12 @@ std::vector<float> kernel_block(const CircularKernel& k, int field) {
   return block;
 }
 
-int checked_max_radius(const FilterOptions& options) {
-  const float r = options.pattern.max_radius_px();
-  if (r < 1.0f)
-    throw std::invalid_argument("circular filters need a max radius k (N - 1) / 2 >= 1 px, got " + std::to_string(r));
-  return static_cast<int>(r);
+int checked_max_radius(const CircularFilterConfig& config) {
+  const int r = config.max_radius_px;
+  if (r < 1)
+    throw std::invalid_argument("circular filters need a max radius k (N - 1) / 2 >= 1 px, got " +
+                                std::to_string(static_cast<float>(r)));
+  return r;
 }
 
 // Output pixels per invocation along each pass (spec constant OUTPUTS): every loaded value serves
@@ -201,9 +203,9 @@ struct BucketPasses {
 
 class Circular final : public gpu::GpuFilter {
  public:
-  Circular(GpuFrame& frame, const FilterOptions& options, int far_components, const CircularPassShape& shape)
-      : Circular(frame, far_components, options.integer("near_components"), checked_max_radius(options),
-                 intermediate_precision_from_string(options.precision), options.integer("adaptive") == 1, shape) {}
+  Circular(GpuFrame& frame, const CircularFilterConfig& config, const CircularPassShape& shape)
+      : Circular(frame, config.far_components, config.near_components, checked_max_radius(config), config.precision,
+                 config.adaptive, shape) {}
 
   Circular(GpuFrame& frame, int far_components, int near_components, int max_radius_px,
            IntermediatePrecision precision, bool adaptive, const CircularPassShape& shape)
@@ -502,7 +504,7 @@ std::uint64_t circular_kernel_block_bytes(const CircularKernel& k) {
 
 std::unique_ptr<gpu::GpuFilter> make_circular_gpu(GpuFrame& frame, const FilterOptions& options, int components,
                                                   std::optional<CircularPassShape> shape) {
-  return std::make_unique<Circular>(frame, options, components,
+  return std::make_unique<Circular>(frame, circular_config(options, components),
                                     shape.value_or(circular_pass_shape_for(frame.ctx.info())));
 }
 

@@ -22,8 +22,9 @@ struct CircularPassShape {
 // Both on for CPU devices (lavapipe), both off for GPUs.
 CircularPassShape circular_pass_shape_for(const vk::DeviceInfo& device);
 
-// `components` (1..6) far-field components; the near field takes options' near_components. Disc
-// radius: options.pattern.max_radius_px(). shape: the device's own unless given.
+// `components` (1..6) far-field components; the rest as circular_config(options, components) reads
+// them (near_components, precision, adaptive, disc radius options.pattern.max_radius_px()). shape:
+// the device's own unless given.
 std::unique_ptr<gpu::GpuFilter> make_circular_gpu(gpu::GpuFrame& frame, const FilterOptions& options, int components,
                                                   std::optional<CircularPassShape> shape = std::nullopt);
 

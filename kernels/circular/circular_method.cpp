@@ -8,8 +8,10 @@
 
 #include <fmt/format.h>
 
+#include "circular_config.hpp"
 #include "circular_gpu.hpp"
 #include "circular_separable.hpp"
+#include "coc_tiles_gpu.hpp"
 #include "method.hpp"
 
 namespace bokeh::methods {
@@ -21,20 +23,18 @@ std::string m_name(int components) { return "circular" + std::to_string(componen
 // Both kernels blur a disc of the pattern's max radius k (N - 1) / 2: the circular filters take
 // their (fixed) kernel from the same gather-size axis as naive and FLAG, so a sweep compares them at
 // the same largest CoC; the per-pixel CoC enters through the near/far alpha w = radius / max radius.
-float disc_radius_px(const FilterOptions& o) { return std::max(1.0f, o.pattern.max_radius_px()); }
+float disc_radius_px(const CircularFilterConfig& c) { return std::max(1.0f, static_cast<float>(c.max_radius_px)); }
 
-int tap_radius(int components, const FilterOptions& o) {
-  return make_circular_kernel_for_disc(components, disc_radius_px(o)).radius_px;
+int tap_radius(int components, const CircularFilterConfig& c) {
+  return make_circular_kernel_for_disc(components, disc_radius_px(c)).radius_px;
 }
 
-int bucket_count(const FilterOptions& o) { return circular_buckets(disc_radius_px(o)).count(); }
-
-bool adaptive(const FilterOptions& o) { return o.integer("adaptive") == 1; }
+int bucket_count(const CircularFilterConfig& c) { return circular_buckets(disc_radius_px(c)).count(); }
 
 // The kernels one field convolves with: the max radius's (adaptive off), or every bucket's (on).
-std::vector<CircularKernel> field_kernels(int components, const FilterOptions& o) {
-  const float disc = disc_radius_px(o);
-  if (!adaptive(o)) return {make_circular_kernel_for_disc(components, disc)};
+std::vector<CircularKernel> field_kernels(int components, const CircularFilterConfig& c) {
+  const float disc = disc_radius_px(c);
+  if (!c.adaptive) return {make_circular_kernel_for_disc(components, disc)};
   std::vector<CircularKernel> kernels;
   for (float rho : circular_buckets(disc).disc_radius_px)
     kernels.push_back(make_circular_kernel_for_disc(components, rho));
@@ -54,17 +54,17 @@ double tile_count(int w, int h) {
 //   far, near: per bucket, the horizontal pass (layer in, intermediates out) and the vertical pass
 //           (intermediates in, the field's sum read and written); the sum zeroed first; the
 //           composite reads colour, both layers and the sum and writes (near: reads too) the output.
-std::vector<PassWork> adaptive_work(int far, const FilterOptions& o, int w, int h) {
+std::vector<PassWork> adaptive_work(const CircularFilterConfig& config, int w, int h) {
   const double px = static_cast<double>(w) * h, tiles = tile_count(w, h);
-  const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
-  const double component = static_cast<double>(circular_component_bytes_per_pixel(precision));
-  const double box = precision == IntermediatePrecision::bracketed10 ? 8 : 0;
-  const int buckets = bucket_count(o);
+  const double component = static_cast<double>(circular_component_bytes_per_pixel(config.precision));
+  const double box = config.precision == IntermediatePrecision::bracketed10 ? 8 : 0;
+  const int buckets = bucket_count(config);
   std::vector<PassWork> work = {{"layers", px, px * 36, px * 32},
                                 {"tiles", 0, tiles * 2 * 4 * 2, tiles * 2 * 4 * (1 + 2.0 * buckets)}};
-  for (const auto& [field, c] : {std::pair<std::string, int>{"far", far}, {"near", o.integer("near_components")}}) {
+  for (const auto& [field, c] : {std::pair<std::string, int>{"far", config.far_components},
+                                 {"near", config.near_components}}) {
     PassWork pass{field, 0, px * (16 * 4 + (field == "near" ? 16 : 0)), px * (16 + 16)};
-    for (const CircularKernel& k : field_kernels(c, o)) {
+    for (const CircularKernel& k : field_kernels(c, config)) {
       pass.taps += 2 * px * c * (2.0 * k.radius_px + 1);
       pass.bytes_read += px * (16 + c * component + box + 16);
       pass.bytes_written += px * (c * component + box + 16);
@@ -77,17 +77,17 @@ std::vector<PassWork> adaptive_work(int far, const FilterOptions& o, int w, int 
 // Both fields as if present (the model cannot see the scene): an empty field's passes do no work
 // on either backend (its horizontal and, near, vertical pass dispatch nothing on the GPU; the far
 // vertical pass then only composites).
-std::vector<PassWork> circular_work(int far, const FilterOptions& o, int w, int h) {
-  if (adaptive(o)) return adaptive_work(far, o, w, h);
+std::vector<PassWork> circular_work(const CircularFilterConfig& config, int w, int h) {
+  if (config.adaptive) return adaptive_work(config, w, h);
   const double px = static_cast<double>(w) * h;
-  const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
-  const double component = static_cast<double>(circular_component_bytes_per_pixel(precision));
-  const double box = precision == IntermediatePrecision::bracketed10 ? 8 : 0;
+  const double component = static_cast<double>(circular_component_bytes_per_pixel(config.precision));
+  const double box = config.precision == IntermediatePrecision::bracketed10 ? 8 : 0;
   // layers: colour, depth, packed input -> both layers (the channel maxima and dispatch sizes are
   // a few bytes).
   std::vector<PassWork> work = {{"layers", px, px * 36, px * 32}};
-  for (const auto& [field, c] : {std::pair<std::string, int>{"far", far}, {"near", o.integer("near_components")}}) {
-    const double taps = px * c * (2.0 * tap_radius(c, o) + 1);  // complex RGBA multiply-adds
+  for (const auto& [field, c] : {std::pair<std::string, int>{"far", config.far_components},
+                                 {"near", config.near_components}}) {
+    const double taps = px * c * (2.0 * tap_radius(c, config) + 1);  // complex RGBA multiply-adds
     work.push_back({field + "_horizontal", taps, px * 16, px * (c * component + box)});
     // Reads the intermediates and the colour and its own layer's alpha (far) or the far result
     // (near); writes the output.
@@ -107,36 +107,34 @@ Method circular_method(int components) {
   m.precisions = {"f32", "f16", "bracketed10"};
   m.samples_pattern = false;
   m.in_default_sweeps = components <= 2;  // 3..6 refine the same algorithm: run them by name
+  OptionSpec adaptive = adaptive_option(
+      "Circular filters: off blurs every pixel with one disc of the max radius, blended by CoC; on spreads each "
+      "pixel over a disc of its own CoC (kernels for radius ranges, Garcia's proposal)");
+  adaptive.tradeoff = {0, 1};  // `tradeoff` runs both
   m.options = {{"near_components",
                 "Circular filters: near-field components (default: the method's own count; circular2 with 1 is "
                 "Garcia's production choice)",
                 static_cast<double>(components), 1, kMaxCircularComponents, true},
-               {"adaptive",
-                "Circular filters: off blurs every pixel with one disc of the max radius, blended by CoC; on "
-                "spreads each pixel over a disc of its own CoC (kernels for radius ranges, Garcia's proposal)",
-                0, 0, 1, true, {"off", "on"}, {0, 1}}};
+               adaptive};
   m.device = [](const FilterOptions&) {
     vk::DeviceRequirements needs;
     needs.subgroup_arithmetic = true;  // the layers pass reduces channel maxima with subgroupMax
     return needs;
   };
-  m.unsupported = [](const FilterOptions& o, int w, int h) -> std::string {
-    if (o.pattern.max_radius_px() < 1.0f) return "circular filters need a max radius k (N - 1) / 2 >= 1 px";
+  // Every function below parses the options once (circular_config) and reads only the config.
+  m.unsupported = [components](const FilterOptions& o, int w, int h) -> std::string {
+    const CircularFilterConfig c = circular_config(o, components);
+    if (c.max_radius_px < 1) return "circular filters need a max radius k (N - 1) / 2 >= 1 px";
     // A bucket's pass dispatches one workgroup column per listed tile: at most every tile, which
     // must stay within the 65535 workgroups every device accepts along x (8192 x 8192 does not).
-    if (adaptive(o) && tile_count(w, h) > 65535)
+    if (c.adaptive && tile_count(w, h) > 65535)
       return fmt::format("adaptive on lists up to {} tiles of {} px a pass, over the 65535 workgroups a dispatch may "
                          "count (an image up to about 8000 x 8000 fits)",
                          tile_count(w, h), kTilePx);
     return "";
   };
   m.cpu_reference = [components](const CpuInput& in) {
-    CircularFilterConfig config;
-    config.far_components = components;
-    config.near_components = in.options.integer("near_components");
-    config.max_radius_px = static_cast<int>(in.options.pattern.max_radius_px());
-    config.precision = intermediate_precision_from_string(in.options.precision);
-    config.adaptive = in.options.integer("adaptive") == 1;
+    const CircularFilterConfig config = circular_config(in.options, components);
     if (!config.adaptive)
       return circular_blur(in.color, in.radius_px, in.depth_m, in.lens.focus_distance_m, config, in.threads);
     AdaptiveWork work;
@@ -148,15 +146,17 @@ Method circular_method(int components) {
   m.make_gpu = [components](gpu::GpuFrame& frame, const FilterOptions& o) {
     return make_circular_gpu(frame, o, components);
   };
-  m.work = [components](const FilterOptions& o, int w, int h) { return circular_work(components, o, w, h); };
+  m.work = [components](const FilterOptions& o, int w, int h) {
+    return circular_work(circular_config(o, components), w, h);
+  };
   m.gpu_memory = [components](const FilterOptions& o, int w, int h, vk::Context* ctx) {
+    const CircularFilterConfig config = circular_config(o, components);
     const auto px = static_cast<std::uint64_t>(w) * h;
-    const IntermediatePrecision precision = intermediate_precision_from_string(o.precision);
-    const int near = o.integer("near_components");
+    const int near = config.near_components;
     // Every kernel (one a field, or one a bucket and field) has its uniform buffer.
     std::uint64_t kernels = 0, largest = 0;
     for (int c : {components, near})
-      for (const CircularKernel& k : field_kernels(c, o)) {
+      for (const CircularKernel& k : field_kernels(c, config)) {
         kernels += circular_kernel_block_bytes(k);
         largest = std::max(largest, circular_kernel_block_bytes(k));
       }
@@ -166,19 +166,21 @@ Method circular_method(int components) {
                                            "(a smaller max radius or fewer components fits)",
                                            m_name(components), largest, ctx->info().name,
                                            ctx->info().max_uniform_buffer_range_bytes));
-    const std::uint64_t inter = std::max(components, near) * px * circular_component_bytes_per_pixel(precision);
-    const std::uint64_t layers = 2 * px * 16, box = precision == IntermediatePrecision::bracketed10 ? px * 8 : 0;
+    const std::uint64_t inter =
+        std::max(components, near) * px * circular_component_bytes_per_pixel(config.precision);
+    const std::uint64_t layers = 2 * px * 16;
+    const std::uint64_t box = config.precision == IntermediatePrecision::bracketed10 ? px * 8 : 0;
     MemoryUse use;
     use.bytes = inter + layers + box + kernels;
     use.details = {{"component_buffers_bytes", inter},
                    {"near_far_layers_bytes", layers},
                    {"box_sum_bytes", box},
                    {"kernel_bytes", kernels}};
-    if (adaptive(o)) {
+    if (config.adaptive) {
       // The field's sum (RGBA f32), the bucket table, and the tiles: list counts and two masks per
       // field and tile, and one list per bucket, field and pass (tiles.glsl).
       const auto tiles = static_cast<std::uint64_t>(tile_count(w, h));
-      const int buckets = bucket_count(o);
+      const int buckets = bucket_count(config);
       const std::uint64_t sum = px * 16, table = kCircularBucketTableBytes;
       const std::uint64_t tile_bytes =
           4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
@@ -195,11 +197,12 @@ Method circular_method(int components) {
   // Radius-following adds the two fields' sums and the bucket's layer (RGBA f32 each, a bucket's
   // window at most the frame).
   m.cpu_memory_bytes = [components](const FilterOptions& o, int w, int h) {
+    const CircularFilterConfig config = circular_config(o, components);
     const auto px = static_cast<std::uint64_t>(w) * h;
     const std::uint64_t fixed = 2 * px * 4 * sizeof(float) +
-                                std::max(components, o.integer("near_components")) * px * 8 * sizeof(float) +
+                                std::max(components, config.near_components) * px * 8 * sizeof(float) +
                                 px * 4 * sizeof(float);
-    return fixed + (adaptive(o) ? 3 * px * 4 * sizeof(float) : 0);
+    return fixed + (config.adaptive ? 3 * px * 4 * sizeof(float) : 0);
   };
   // Same taps, weights and order as the CPU, so f32 differs by rounding only (measured 1.4e-6 at 6
   // components); stored f16 or 10-bit parts may round the other way on the GPU (Vulkan allows either):
@@ -211,32 +214,38 @@ Method circular_method(int components) {
   // 1e-5 + 2 sum_k storage_k. Where a field's coverage is small (an isolated pixel, down to 1e-4) the
   // division amplifies more, as it does for off; tests/kernels/circular/test_gpu_circular.cpp measures both.
   // Measured on lavapipe: <= 3e-7 of the largest value at every precision (it rounds like the CPU).
-  auto storage = [components](const FilterOptions& o, double units) {
-    const IntermediatePrecision p = intermediate_precision_from_string(o.precision);
+  auto storage = [](const CircularFilterConfig& config, double units) {
     double bound = 0;
-    for (int c : {components, o.integer("near_components")}) {
+    for (int c : {config.far_components, config.near_components}) {
       double field = 0;
-      for (const CircularKernel& k : field_kernels(c, o)) field += circular_storage_bound(k, p, units);
+      for (const CircularKernel& k : field_kernels(c, config))
+        field += circular_storage_bound(k, config.precision, units);
       bound = std::max(bound, field);
     }
     return bound;
   };
-  m.gpu_tolerance = [storage](const FilterOptions& o) { return 1e-5 + (adaptive(o) ? 2 : 1) * storage(o, 2); };
-  m.storage_tolerance = [storage](const FilterOptions& o) { return storage(o, 1); };
+  m.gpu_tolerance = [components, storage](const FilterOptions& o) {
+    const CircularFilterConfig config = circular_config(o, components);
+    return 1e-5 + (config.adaptive ? 2 : 1) * storage(config, 2);
+  };
+  m.storage_tolerance = [components, storage](const FilterOptions& o) {
+    return storage(circular_config(o, components), 1);
+  };
   // The horizontal pass stores sum_i tap_i J (complex) per component: |Re|, |Im| <= S J with
   // S = max_c sum_i (|Re tap_i| + |Im tap_i|) (about the tap count: S grows with the radius). f16
   // intermediates overflow at 65504 / S; f32 and bracketed10 (whose vertical pass rebuilds I in f32)
   // at f32's largest value over the vertical pass's second sum, 2 S^2.
   m.input_limit = [components](const FilterOptions& o) {
-    const double disc = disc_radius_px(o);
+    const CircularFilterConfig config = circular_config(o, components);
+    const double disc = disc_radius_px(config);
     double s = 0;
-    for (int c : {components, o.integer("near_components")})
+    for (int c : {components, config.near_components})
       for (const auto& taps : make_circular_kernel_for_disc(c, disc).taps) {
         double sum = 0;
         for (std::complex<float> t : taps) sum += std::abs(t.real()) + std::abs(t.imag());
         s = std::max(s, sum);
       }
-    if (intermediate_precision_from_string(o.precision) == IntermediatePrecision::f16) return 65504.0 / s;
+    if (config.precision == IntermediatePrecision::f16) return 65504.0 / s;
     return static_cast<double>(std::numeric_limits<float>::max()) / (2 * s * s);
   };
   m.energy_note = "the kernels sum to one; a constant-radius image is one convolution";

@@ -34,6 +34,7 @@
 
 #include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
+#include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_reduced.hpp"
 #include "vk/spirv.hpp"
@@ -71,9 +72,8 @@ const std::vector<std::string>& flag_horizontal_blocks() {
 // takes the largest block within the bound and a configuration beyond either bound is refused.
 constexpr int kSoftwareMaxBlockLayers = 324, kSoftwareMaxBracketedLayers = 31;
 
-int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device, int layers) {
-  const auto& name = flag_horizontal_blocks().at(static_cast<std::size_t>(options.integer("horizontal_block")));
-  if (name != "auto") return std::stoi(name);
+int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& device, int layers) {
+  if (requested) return *requested;
   if (!device.is_software()) return 1;
   for (int block : {4, 2})
     if (block * layers <= kSoftwareMaxBlockLayers) return block;
@@ -92,9 +92,12 @@ const std::vector<std::string>& flag_horizontal_bins() {
 // every bin access becomes the per-lane array access masking was meant to avoid.
 constexpr int kSoftwareMaxMaskedLayers = 32;
 
-bool flag_masked_bins(const FilterOptions& options, const vk::DeviceInfo& device, int layers) {
-  const auto& name = flag_horizontal_bins().at(static_cast<std::size_t>(options.integer("horizontal_bins")));
-  if (name != "auto") return name == "masked";
+bool flag_masked_bins(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
+  switch (bins) {
+    case FlagHorizontalBins::indexed: return false;
+    case FlagHorizontalBins::masked: return true;
+    case FlagHorizontalBins::automatic: break;
+  }
   return device.is_software() && layers <= kSoftwareMaxMaskedLayers;
 }
 
@@ -133,19 +136,17 @@ void check_colour(GpuFrame& frame, LayerPrecision precision) {
 
 class Flag final : public gpu::GpuFilter {
  public:
-  Flag(GpuFrame& frame, const FilterOptions& options)
-      : Flag(frame, options, layer_precision_from_string(options.precision)) {}
-  Flag(GpuFrame& frame, const FilterOptions& options, LayerPrecision precision)
+  Flag(GpuFrame& frame, const FlagConfig& config)
       : frame_(frame),
-        scale_(options.buffer_scale),
-        pattern_(reduced_pattern(options.pattern, options.buffer_scale)),
+        scale_(config.buffer_scale),
+        pattern_(reduced_pattern(config.pattern, config.buffer_scale)),
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
-        outputs_(flag_horizontal_block(options, frame.ctx.info(), pattern_.layers())),
-        masked_bins_(flag_masked_bins(options, frame.ctx.info(), pattern_.layers())),
-        tile_px_(adaptive_on(options) ? adaptive_tile_px(options) : 0),
+        outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), pattern_.layers())),
+        masked_bins_(flag_masked_bins(config.horizontal_bins, frame.ctx.info(), pattern_.layers())),
+        tile_px_(config.adaptive ? config.adaptive_tile_px : 0),
         layer_count_(pattern_.layers()) {
-    check_colour(frame, precision);
+    check_colour(frame, config.precision);
     const vk::Buffer* flag_input = &frame.packed;
     const vk::Buffer* flag_output = &frame.output;
     if (scale_ > 1) {
@@ -172,7 +173,7 @@ class Flag final : public gpu::GpuFilter {
       flag_input = &*packed_low_;
       flag_output = &*output_low_;
     }
-    const bool bracketed = is_bracketed(precision);
+    const bool bracketed = is_bracketed(config.precision);
     std::uint32_t extent_x = low_width_, extent_y = low_height_;
     if (tile_px_ > 0) {
       tiles_.emplace(frame.ctx, *flag_input, low_width_, low_height_, pattern_.spacing_px, tile_px_);
@@ -194,7 +195,7 @@ class Flag final : public gpu::GpuFilter {
       tile_layers_->bind(0, tiles_->buffer());
     }
     check_software_bounds(frame.ctx.info(), outputs_, layer_count_, bracketed);
-    const std::string variant = std::string(tile_px_ > 0 ? "_adaptive_" : "_") + to_string(precision);
+    const std::string variant = std::string(tile_px_ > 0 ? "_adaptive_" : "_") + to_string(config.precision);
     // constant_id 4 is the tile size (adaptive; unused otherwise), 5 MASKED_BINS.
     std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px,
                                                       outputs_,     tile_px_,      masked_bins_ ? 1 : 0};
@@ -206,7 +207,7 @@ class Flag final : public gpu::GpuFilter {
       horizontal_bindings.push_back(kBuffer);                 // the tile map
       vertical_bindings.insert(vertical_bindings.end(), {kBuffer, kBuffer});  // the tile map, FLAG's input
     }
-    layers_.emplace(frame.ctx, layer_format(precision), extent_x, extent_y, static_cast<std::uint32_t>(layer_count_));
+    layers_.emplace(frame.ctx, layer_format(config.precision), extent_x, extent_y, static_cast<std::uint32_t>(layer_count_));
     horizontal_.emplace(frame.ctx, vk::spirv("flag/horizontal" + variant), horizontal_bindings, sizeof(PassParams),
                         horizontal_constants);
     vertical_.emplace(frame.ctx, vk::spirv("flag/vertical" + variant), vertical_bindings, sizeof(PassParams),
@@ -328,7 +329,7 @@ class Flag final : public gpu::GpuFilter {
 }  // namespace
 
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options) {
-  return std::make_unique<Flag>(frame, options);
+  return std::make_unique<Flag>(frame, flag_config(options));
 }
 
 }  // namespace bokeh

@@ -3,6 +3,7 @@
 // (adaptive = on), bracket (bracketed precisions), horizontal, vertical, upsample (scale > 1).
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,8 @@ namespace bokeh {
 // flag_gpu.cpp) and 1 on GPUs, where 4 pixels' bins (4 x ceil(N/2) x 3 floats) would spill registers
 // and the L1 cache already shares the loads.
 const std::vector<std::string>& flag_horizontal_blocks();  // "auto", "1", "2", "4", "8"
-int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& device, int layers);
+// The block the pass runs: `requested` (FlagConfig::horizontal_block), or auto's choice when empty.
+int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& device, int layers);
 
 // How the horizontal pass bins a row sample into the layer its disc reaches (MASKED_BINS in
 // shaders/flag/layers.glsl), the method's option "horizontal_bins"; both add the same samples in the
@@ -29,8 +31,12 @@ int flag_horizontal_block(const FilterOptions& options, const vk::DeviceInfo& de
 // lavapipe no longer unrolls the loop over the bins and masked is the slower; flag_gpu.cpp has the
 // measurements), indexed otherwise and on GPUs.
 const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked"
-bool flag_masked_bins(const FilterOptions& options, const vk::DeviceInfo& device, int layers);
+// The option's value; the enumerators in the order of flag_horizontal_bins().
+enum class FlagHorizontalBins { automatic, indexed, masked };
+// Whether the pass runs masked bins: `bins` as chosen, auto's choice by device and layers.
+bool flag_masked_bins(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 
+// Parses `options` once (flag_config) and makes the filter.
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
 
 VkFormat layer_format(LayerPrecision precision);  // FLAG's 3D buffer format

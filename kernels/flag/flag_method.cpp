@@ -7,6 +7,7 @@
 #include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
 #include "flag.hpp"
+#include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_memory.hpp"
 #include "flag_reduced.hpp"
@@ -17,25 +18,24 @@ namespace bokeh::methods {
 
 namespace {
 
-std::vector<PassWork> flag_work(const FilterOptions& o, int w, int h) {
-  const LayerPrecision precision = layer_precision_from_string(o.precision);
-  const int s = o.buffer_scale;
-  const GatherPattern low = reduced_pattern(o.pattern, s);
+std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
+  const int s = c.buffer_scale;
+  const GatherPattern low = reduced_pattern(c.pattern, s);
   const double full = static_cast<double>(w) * h, lows = static_cast<double>(ceil_div(w, s)) * ceil_div(h, s);
-  const double layer_bytes = lows * low.layers() * bytes_per_texel(precision);
+  const double layer_bytes = lows * low.layers() * bytes_per_texel(c.precision);
   std::vector<PassWork> work;
   if (s > 1) work.push_back({"downsample", full, full * 32, lows * 16});
-  if (adaptive_on(o)) {
+  if (c.adaptive) {
     // The tile map on FLAG's grid: tile_max reads every radius, tile_reach a (2 R + 1)^2 and
     // tile_layers a (2 R + 1) neighbourhood of tiles. The passes below stay at the worst case's
     // work: a bound; the scene decides how much less they do (stats: adaptive).
-    const int t = adaptive_tile_px(o), range = tile_reach_range(low, t);
+    const int t = c.adaptive_tile_px, range = tile_reach_range(low, t);
     const double tiles = static_cast<double>(ceil_div(ceil_div(w, s), t)) * ceil_div(ceil_div(h, s), t);
     work.push_back({"tile_max", lows, lows * 16, tiles * 16});
     work.push_back({"tile_reach", tiles * (2 * range + 1) * (2 * range + 1), tiles * 16, tiles * 16});
     work.push_back({"tile_layers", tiles * (2 * range + 1), tiles * 16, tiles * 16});
   }
-  if (is_bracketed(precision))
+  if (is_bracketed(c.precision))
     work.push_back({"bracket", lows * low.size_n, lows * 16,
                     static_cast<double>(flag_bracket_buffer_bytes(ceil_div(h, s), low.layers()))});
   work.push_back({"horizontal", lows * low.size_n, lows * 16, layer_bytes});
@@ -44,31 +44,30 @@ std::vector<PassWork> flag_work(const FilterOptions& o, int w, int h) {
   return work;
 }
 
-MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx) {
-  const LayerPrecision precision = layer_precision_from_string(o.precision);
-  const FlagBufferExtent e = flag_buffer_extent(w, h, o.pattern, o.buffer_scale);
+MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
+  const FlagBufferExtent e = flag_buffer_extent(w, h, c.pattern, c.buffer_scale);
   MemoryUse use;
-  const std::uint64_t texels = flag_texel_bytes(w, h, o.pattern, precision, o.buffer_scale);
+  const std::uint64_t texels = flag_texel_bytes(w, h, c.pattern, c.precision, c.buffer_scale);
   std::uint64_t layers = texels;
   if (ctx) {
-    layers = vk::image_3d_requirement_bytes(*ctx, layer_format(precision), e.width, e.height, e.layers);
+    layers = vk::image_3d_requirement_bytes(*ctx, layer_format(c.precision), e.width, e.height, e.layers);
     use.from_driver = true;
   }
   std::uint64_t other = 0;
-  if (is_bracketed(precision)) other += flag_bracket_buffer_bytes(e.height, e.layers);
-  if (o.buffer_scale > 1) {
+  if (is_bracketed(c.precision)) other += flag_bracket_buffer_bytes(e.height, e.layers);
+  if (c.buffer_scale > 1) {
     other += 2ull * e.width * e.height * 16;  // low-res packed input and output
-    const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
+    const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
     other += DiscAreaTable(low).by_index().size() * sizeof(std::int32_t);  // the downsample's area table
   }
   // Adaptive: the worst case stays the model (what a budget must allow for); the layers actually
   // allocated follow the scene (the point's memory.allocated_bytes). Plus the tile map.
-  if (adaptive_on(o)) other += gpu::CocTilesGpu::bytes(static_cast<int>(e.width), static_cast<int>(e.height),
-                                                       adaptive_tile_px(o));
+  if (c.adaptive)
+    other += gpu::CocTilesGpu::bytes(static_cast<int>(e.width), static_cast<int>(e.height), c.adaptive_tile_px);
   use.bytes = layers + other;
-  const double paper = flag_paper_bytes(w, h, o.pattern, precision, o.buffer_scale);
+  const double paper = flag_paper_bytes(w, h, c.pattern, c.precision, c.buffer_scale);
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
-                 {"bytes_per_texel", bytes_per_texel(precision)},
+                 {"bytes_per_texel", bytes_per_texel(c.precision)},
                  {"layer_buffer_bytes", layers},
                  {"texel_bytes", texels},
                  {"paper_convention_bytes", paper},
@@ -82,12 +81,12 @@ MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx
 constexpr std::uint64_t kCpuWholeBufferBytes = 256ull << 20;
 
 // Strip width in px for the CPU reference, 0 for the whole frame at once.
-int cpu_strip_px(const FilterOptions& o, int w, int h) {
-  if (o.buffer_scale != 1 || is_bracketed(layer_precision_from_string(o.precision))) return 0;
+int cpu_strip_px(const FlagConfig& c, int w, int h) {
+  if (c.buffer_scale != 1 || is_bracketed(c.precision)) return 0;
   // Per column: the layers (3 floats each), the cropped packed input (4) and its blurred copy (3).
-  const std::uint64_t column_bytes = static_cast<std::uint64_t>(h) * (o.pattern.layers() * 12 + 16 + 12);
+  const std::uint64_t column_bytes = static_cast<std::uint64_t>(h) * (c.pattern.layers() * 12 + 16 + 12);
   if (static_cast<std::uint64_t>(w) * column_bytes <= kCpuWholeBufferBytes) return 0;
-  const int halo = o.pattern.half() * o.pattern.spacing_px;
+  const int halo = c.pattern.half() * c.pattern.spacing_px;
   return std::max<int>(64, static_cast<int>(kCpuWholeBufferBytes / column_bytes) - 2 * halo);
 }
 
@@ -95,21 +94,20 @@ int cpu_strip_px(const FilterOptions& o, int w, int h) {
 // scene's largest disc needs (the same image as with ceil(N/2): scene_sized_pattern), then every
 // pixel of a tile nothing blurred reaches (D = 0) gets its input instead of its round trip through
 // the layers.
-Image flag_adaptive_cpu(const CpuInput& in, LayerPrecision precision) {
-  const FilterOptions& o = in.options;
-  const int s = o.buffer_scale;
-  const GatherPattern grid = reduced_pattern(o.pattern, s);
-  check_layer_input(in.color, precision);
+Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
+  const int s = c.buffer_scale;
+  const GatherPattern grid = reduced_pattern(c.pattern, s);
+  check_layer_input(in.color, c.precision);
   const Image packed = s == 1 ? in.packed : flag_downsample(in.color, in.radius_px, grid, s);
-  const CocTiles tiles = coc_tiles(packed, grid, adaptive_tile_px(o));
+  const CocTiles tiles = coc_tiles(packed, grid, c.adaptive_tile_px);
   const GatherPattern sized = scene_sized_pattern(grid, tiles.scene_max_index);
-  FilterOptions sized_options = o;
-  sized_options.pattern = sized;
+  FlagConfig sized_config = c;
+  sized_config.pattern = sized;
   Image blurred;
-  if (const int strip = s == 1 ? cpu_strip_px(sized_options, packed.width, packed.height) : 0; strip > 0)
-    blurred = flag_blur_in_strips(packed, sized, precision, strip, in.threads);
+  if (const int strip = s == 1 ? cpu_strip_px(sized_config, packed.width, packed.height) : 0; strip > 0)
+    blurred = flag_blur_in_strips(packed, sized, c.precision, strip, in.threads);
   else
-    blurred = flag_blur(packed, sized, precision, in.threads);
+    blurred = flag_blur(packed, sized, c.precision, in.threads);
   for (int y = 0; y < packed.height; ++y)
     for (int x = 0; x < packed.width; ++x) {
       if (tiles.reach_index[static_cast<std::size_t>(tiles.tile_of(x, y))] != 0) continue;
@@ -136,7 +134,7 @@ void declare_flag(std::vector<Method>& methods) {
   for (LayerPrecision p : all_layer_precisions()) m.precisions.push_back(to_string(p));
   // The paper's RGBA16F first: the default.
   std::swap(m.precisions[0], m.precisions[1]);
-  m.buffer_scales = {1, 2, 4};
+  m.buffer_scales = flag_buffer_scales();
   m.options = {{"horizontal_block",
                 "flag: pixels per GPU invocation of the horizontal pass, at stride k (auto: 4 on CPU devices such as "
                 "lavapipe, 1 on GPUs; every block gives the same image)",
@@ -155,32 +153,37 @@ void declare_flag(std::vector<Method>& methods) {
                                "output their input: the worst case's image bit for bit (f32), or up to one rounding "
                                "of the layer format in those tiles"),
                adaptive_tile_option()};
+  // Every function below parses the options once (flag_config) and reads only the FlagConfig.
   m.device = [](const FilterOptions& o) {
+    const FlagConfig c = flag_config(o);
     vk::DeviceRequirements needs;
-    needs.storage_image_3d_formats = {layer_format(layer_precision_from_string(o.precision))};
-    needs.subgroup_arithmetic = adaptive_on(o);  // the tile map's bound is shared across a subgroup
+    needs.storage_image_3d_formats = {layer_format(c.precision)};
+    needs.subgroup_arithmetic = c.adaptive;  // the tile map's bound is shared across a subgroup
     return needs;
   };
   m.cpu_reference = [](const CpuInput& in) {
-    const LayerPrecision precision = layer_precision_from_string(in.options.precision);
-    if (adaptive_on(in.options)) return flag_adaptive_cpu(in, precision);
-    if (in.options.buffer_scale != 1)
-      return flag_reduced_blur(in.color, in.radius_px, in.options.pattern, in.options.buffer_scale, precision,
-                               in.threads);
-    if (const int strip = cpu_strip_px(in.options, in.packed.width, in.packed.height); strip > 0)
-      return flag_blur_in_strips(in.packed, in.options.pattern, precision, strip, in.threads);
-    return flag_blur(in.packed, in.options.pattern, precision, in.threads);
+    const FlagConfig c = flag_config(in.options);
+    if (c.adaptive) return flag_adaptive_cpu(in, c);
+    if (c.buffer_scale != 1)
+      return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);
+    if (const int strip = cpu_strip_px(c, in.packed.width, in.packed.height); strip > 0)
+      return flag_blur_in_strips(in.packed, c.pattern, c.precision, strip, in.threads);
+    return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
   m.make_gpu = make_flag_gpu;
-  m.work = flag_work;
-  m.gpu_memory = flag_gpu_memory;
+  m.work = [](const FilterOptions& o, int w, int h) { return flag_work(flag_config(o), w, h); };
+  m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
+    return flag_gpu_memory(flag_config(o), w, h, ctx);
+  };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
-    if (const int strip = cpu_strip_px(o, w, h); strip > 0) {
-      const int columns = std::min(w, strip + 2 * o.pattern.half() * o.pattern.spacing_px);
-      return static_cast<std::uint64_t>(columns) * h * (o.pattern.layers() * 12 + 16 + 12);
+    const FlagConfig c = flag_config(o);
+    if (const int strip = cpu_strip_px(c, w, h); strip > 0) {
+      const int columns = std::min(w, strip + 2 * c.pattern.half() * c.pattern.spacing_px);
+      return static_cast<std::uint64_t>(columns) * h * (c.pattern.layers() * 12 + 16 + 12);
     }
-    const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
-    const auto lw = static_cast<std::uint64_t>(ceil_div(w, o.buffer_scale)), lh = static_cast<std::uint64_t>(ceil_div(h, o.buffer_scale));
+    const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
+    const auto lw = static_cast<std::uint64_t>(ceil_div(w, c.buffer_scale));
+    const auto lh = static_cast<std::uint64_t>(ceil_div(h, c.buffer_scale));
     return lw * lh * low.layers() * 3 * sizeof(float);  // FlagLayers: the whole 3D buffer in f32
   };
   // Against the CPU emulation of the same format. Each output sums 2n+1 non-negative layer values,
@@ -190,14 +193,14 @@ void declare_flag(std::vector<Method>& methods) {
   //   one code per value, (2n+1) / levels of the largest value. Doubled for the bilinear upsample of
   //   reduced buffers (a low-res value can exceed the full-res output it feeds by up to 2x).
   m.gpu_tolerance = [](const FilterOptions& o) {
-    const LayerPrecision p = layer_precision_from_string(o.precision);
-    const GatherPattern low = reduced_pattern(o.pattern, o.buffer_scale);
-    const double upsample = o.buffer_scale > 1 ? 2.0 : 1.0;
-    switch (p) {
+    const FlagConfig c = flag_config(o);
+    const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
+    const double upsample = c.buffer_scale > 1 ? 2.0 : 1.0;
+    switch (c.precision) {
       case LayerPrecision::f32: return 1e-5;
       case LayerPrecision::f16: return upsample * std::ldexp(1.0, -10) + 1e-5;
       case LayerPrecision::r11g11b10f: return upsample * std::ldexp(1.0, -5) + 1e-5;
-      default: return upsample * low.size_n / bracket_levels(p) + 1e-5;
+      default: return upsample * low.size_n / bracket_levels(c.precision) + 1e-5;
     }
   };
   // Storage, per output value relative to the largest: a GPU may round each stored layer value
@@ -206,19 +209,20 @@ void declare_flag(std::vector<Method>& methods) {
   // upsample conserve energy (the bilinear tent weights sum to one per low-res pixel) and are exact
   // at radius 0 (every source below s / 2 stays at full resolution).
   m.storage_tolerance = [](const FilterOptions& o) {
-    const LayerPrecision p = layer_precision_from_string(o.precision);
-    switch (p) {
+    const FlagConfig c = flag_config(o);
+    switch (c.precision) {
       case LayerPrecision::f32: return 0.0;
       case LayerPrecision::f16: return std::ldexp(1.0, -10);
       case LayerPrecision::r11g11b10f: return std::ldexp(1.0, -5);
-      default: return static_cast<double>(reduced_pattern(o.pattern, o.buffer_scale).size_n) / bracket_levels(p);
+      default:
+        return static_cast<double>(reduced_pattern(c.pattern, c.buffer_scale).size_n) / bracket_levels(c.precision);
     }
   };
   // An isolated highlight in focus is stored as it is (its disc's area is 1), so the layer format's
   // largest finite value bounds it: f16 65504, r11g11b10f blue's (2 - 2^-5) 2^15 = 64512 (red and
   // green reach 65024). f32 and the bracketed formats (offsets and scales in f32) have f32's range.
   m.input_limit = [](const FilterOptions& o) {
-    switch (layer_precision_from_string(o.precision)) {
+    switch (flag_config(o).precision) {
       case LayerPrecision::f16: return 65504.0;
       case LayerPrecision::r11g11b10f: return 64512.0;
       default: return static_cast<double>(std::numeric_limits<float>::max());

@@ -5,26 +5,34 @@
 #include <stdexcept>
 #include <string>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "ceil_div.hpp"
 #include "coc.hpp"
 
 namespace bokeh {
 
-namespace {
-void check_scale(int scale) {
-  if (scale != 1 && scale != 2 && scale != 4)
-    throw std::invalid_argument("buffer scale must be 1 (full), 2 (half) or 4 (quarter), got " + std::to_string(scale));
+const std::vector<int>& flag_buffer_scales() {
+  static const std::vector<int> scales = {1, 2, 4};
+  return scales;
 }
-}  // namespace
+
+void check_buffer_scale(int scale) {
+  const auto& scales = flag_buffer_scales();
+  if (std::find(scales.begin(), scales.end(), scale) == scales.end())
+    throw std::invalid_argument(fmt::format("buffer scale must be one of {} (the 3D buffer at 1/scale resolution), got {}",
+                                            fmt::join(scales, ", "), scale));
+}
 
 GatherPattern reduced_pattern(const GatherPattern& full, int scale) {
-  check_scale(scale);
+  check_buffer_scale(scale);
   validate(full);
   return {2 * ceil_div(full.layers(), scale) - 1, full.spacing_px};
 }
 
 Image flag_downsample(const Image& color, const Image& radius_px, const GatherPattern& low, int scale) {
-  check_scale(scale);
+  check_buffer_scale(scale);
   if (color.channels < 3 || radius_px.channels != 1 || color.width != radius_px.width ||
       color.height != radius_px.height)
     throw std::invalid_argument("flag_downsample: colour (>= 3 channels) and radius (1 channel) must match in size");
@@ -55,7 +63,7 @@ Image flag_downsample(const Image& color, const Image& radius_px, const GatherPa
 }
 
 Image flag_upsample(const Image& blurred_low, const Image& color, const Image& radius_px, int scale) {
-  check_scale(scale);
+  check_buffer_scale(scale);
   const int lw = blurred_low.width, lh = blurred_low.height;
   if (lw != ceil_div(color.width, scale) || lh != ceil_div(color.height, scale))
     throw std::invalid_argument("flag_upsample: low-res image is not the colour's size / scale");
@@ -84,7 +92,7 @@ Image flag_upsample(const Image& blurred_low, const Image& color, const Image& r
 
 ReducedFlag flag_reduced(const Image& color, const Image& radius_px, const GatherPattern& pattern, int scale,
                          LayerPrecision precision, int threads) {
-  check_scale(scale);
+  check_buffer_scale(scale);
   validate(pattern);
   check_layer_input(color, precision);  // before the downsample, whose weights could hide a negative colour
   ReducedFlag r;
@@ -100,7 +108,7 @@ ReducedFlag flag_reduced(const Image& color, const Image& radius_px, const Gathe
 Image flag_reduced_blur(const Image& color, const Image& radius_px, const GatherPattern& pattern, int scale,
                         LayerPrecision precision, int threads) {
   // flag_reduced's passes without keeping the intermediates; flag_blur gives flag_vertical(flag_horizontal()).
-  check_scale(scale);
+  check_buffer_scale(scale);
   validate(pattern);
   if (scale == 1) return flag_blur(pack_gather_input(color, radius_px, pattern, threads), pattern, precision, threads);
   check_layer_input(color, precision);

@@ -34,11 +34,19 @@
 //     weight (1 / (1 + ((s r'_t - r_p) / s)^2) on the four taps) measured no better against full-res
 //     f32 FLAG on hoops, pillars and points at 480x270, N = 21/41, s = 2/4 (RMSE within -5% .. +1%),
 //     and a (1 - w) c + w B blend was 2-14% worse. The CoC similarity enters where it matters, in w.
+#include <vector>
+
 #include "flag.hpp"
 #include "gather_pattern.hpp"
 #include "image.hpp"
 
 namespace bokeh {
+
+// The resolution divisors of FLAG's 3D buffer: 1 full, 2 half, 4 quarter (the method's
+// Method::buffer_scales; flag_memory.hpp sizes the same buffers).
+const std::vector<int>& flag_buffer_scales();
+// Throws std::invalid_argument unless `scale` is one of flag_buffer_scales().
+void check_buffer_scale(int scale);
 
 // The low-res pattern at 1/scale: N' = 2 ceil(ceil(N/2) / scale) - 1, same k. scale 1 gives `full`.
 GatherPattern reduced_pattern(const GatherPattern& full, int scale);
@@ -63,7 +71,7 @@ struct ReducedFlag {
 };
 
 // The whole pipeline with its intermediates. scale 1 is plain FLAG (packed with pack_gather_input,
-// output = blurred). Throws for scales other than 1, 2, 4 and, for unsigned precisions, negative colours.
+// output = blurred). Throws for scales not in flag_buffer_scales() and, for unsigned precisions, negative colours.
 ReducedFlag flag_reduced(const Image& color, const Image& radius_px, const GatherPattern& pattern, int scale,
                          LayerPrecision precision, int threads = default_cpu_threads());
 Image flag_reduced_blur(const Image& color, const Image& radius_px, const GatherPattern& pattern, int scale,

@@ -7,6 +7,7 @@
 
 #include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
+#include "naive_config.hpp"
 #include "vk/spirv.hpp"
 
 namespace bokeh {
@@ -23,11 +24,9 @@ OptionSpec naive_gather_block_option() {
           0, 0, 0, false, naive_gather_blocks()};
 }
 
-GatherBlock naive_gather_block(const FilterOptions& options, const vk::DeviceInfo& device) {
-  const auto& name = naive_gather_blocks().at(static_cast<std::size_t>(options.integer("gather_block")));
-  if (name == "auto") return device.is_software() ? GatherBlock{8, 4} : GatherBlock{1, 1};
-  const auto x = name.find('x');
-  return {std::stoi(name.substr(0, x)), std::stoi(name.substr(x + 1))};
+GatherBlock naive_gather_block(std::optional<GatherBlock> requested, const vk::DeviceInfo& device) {
+  if (requested) return *requested;
+  return device.is_software() ? GatherBlock{8, 4} : GatherBlock{1, 1};
 }
 
 namespace {
@@ -76,8 +75,9 @@ class NaiveGather final : public gpu::GpuFilter {
 }  // namespace
 
 std::unique_ptr<gpu::GpuFilter> make_naive_gpu(gpu::GpuFrame& frame, const FilterOptions& options) {
-  return std::make_unique<NaiveGather>(frame, naive_gather_block(options, frame.ctx.info()),
-                                       adaptive_on(options) ? adaptive_tile_px(options) : 0);
+  const NaiveConfig c = naive_config(options);
+  return std::make_unique<NaiveGather>(frame, naive_gather_block(c.gather_block, frame.ctx.info()),
+                                       c.adaptive ? c.adaptive_tile_px : 0);
 }
 
 }  // namespace bokeh

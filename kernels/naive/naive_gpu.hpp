@@ -1,5 +1,6 @@
 #pragma once
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,10 +16,12 @@ const std::vector<std::string>& naive_gather_blocks();  // "auto", "1x1", "4x1",
 struct GatherBlock {
   int x = 1, y = 1;
 };
-GatherBlock naive_gather_block(const FilterOptions& options, const vk::DeviceInfo& device);
+// The block the gather runs: `requested` (NaiveConfig::gather_block), or auto's choice when empty.
+GatherBlock naive_gather_block(std::optional<GatherBlock> requested, const vk::DeviceInfo& device);
 // The option itself, for methods that run naive's gather inside them (sprites).
 OptionSpec naive_gather_block_option();
 
+// Parses `options` once (naive_config) and makes the filter.
 std::unique_ptr<gpu::GpuFilter> make_naive_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
 
 }  // namespace bokeh

@@ -1,6 +1,7 @@
 // naive: the quadratic gather of the FLAG paper, section 3.1.
 #include "coc_tiles_gpu.hpp"
 #include "method.hpp"
+#include "naive_config.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
 
@@ -23,14 +24,16 @@ void declare_naive(std::vector<Method>& methods) {
                                "through)"),
                adaptive_tile_option()};
   // Adaptive: the tile map's bound is shared across a subgroup (subgroupMax, shaders/common/tiles.glsl).
+  // Every function below parses the options once (naive_config) and reads only the NaiveConfig.
   m.device = [](const FilterOptions& o) {
     vk::DeviceRequirements needs;
-    needs.subgroup_arithmetic = adaptive_on(o);
+    needs.subgroup_arithmetic = naive_config(o).adaptive;
     return needs;
   };
   m.cpu_reference = [](const CpuInput& in) {
-    if (!adaptive_on(in.options)) return naive_gather(in.packed, in.options.pattern, in.threads);
-    const CocTiles tiles = coc_tiles(in.packed, in.options.pattern, adaptive_tile_px(in.options));
+    const NaiveConfig c = naive_config(in.options);
+    if (!c.adaptive) return naive_gather(in.packed, in.options.pattern, in.threads);
+    const CocTiles tiles = coc_tiles(in.packed, in.options.pattern, c.adaptive_tile_px);
     if (in.stats)
       (*in.stats)["adaptive"] = coc_tiles_stats(tiles, in.options.pattern, in.packed.width, in.packed.height);
     return naive_gather(in.packed, in.options.pattern, in.threads, &tiles);
@@ -41,10 +44,11 @@ void declare_naive(std::vector<Method>& methods) {
   // neighbourhood of tiles), and the gather's N x N as the bound it is: the scene decides how much
   // less it visits (stats: adaptive.gather_sample_fraction).
   m.work = [](const FilterOptions& o, int w, int h) {
+    const NaiveConfig c = naive_config(o);
     const double pixels = static_cast<double>(w) * h;
     std::vector<PassWork> work;
-    if (adaptive_on(o)) {
-      const int t = adaptive_tile_px(o), range = tile_reach_range(o.pattern, t);
+    if (c.adaptive) {
+      const int t = c.adaptive_tile_px, range = tile_reach_range(o.pattern, t);
       const double tiles = static_cast<double>((w + t - 1) / t) * ((h + t - 1) / t);
       work.push_back({"tile_max", pixels, pixels * 16, tiles * 16});
       work.push_back({"tile_reach", tiles * (2 * range + 1) * (2 * range + 1), tiles * 16, tiles * 16});
@@ -53,14 +57,16 @@ void declare_naive(std::vector<Method>& methods) {
     return work;
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context*) {
+    const NaiveConfig c = naive_config(o);
     MemoryUse use;
-    if (adaptive_on(o)) use.bytes = gpu::CocTilesGpu::bytes(w, h, adaptive_tile_px(o));
+    if (c.adaptive) use.bytes = gpu::CocTilesGpu::bytes(w, h, c.adaptive_tile_px);
     use.details = {{"tile_map_bytes", use.bytes}};
     return use;
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
-    if (!adaptive_on(o)) return std::uint64_t{0};
-    const auto t = static_cast<std::uint64_t>(adaptive_tile_px(o));
+    const NaiveConfig c = naive_config(o);
+    if (!c.adaptive) return std::uint64_t{0};
+    const auto t = static_cast<std::uint64_t>(c.adaptive_tile_px);
     return (static_cast<std::uint64_t>(w) + t - 1) / t * ((static_cast<std::uint64_t>(h) + t - 1) / t) * 8;
   };
   // The same sums in the same order as the CPU: only f32 rounding of the GPU's fused operations.

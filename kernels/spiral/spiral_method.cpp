@@ -1,5 +1,8 @@
 // spiral: single-pass golden-angle spiral gather with the blog's fixed-weight blend (Godot 4's circle
 // mode); see spiral.hpp.
+#include <cstdint>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "method.hpp"
@@ -14,9 +17,18 @@ namespace {
 // The table is 32 bytes per sample; past this the spiral is not a real-time method any more.
 constexpr std::int64_t kMaxSpiralSamples = std::int64_t{1} << 20;
 
-double spacing_of(const FilterOptions& o) { return o.number("spiral_spacing_px"); }
-double radius_of(const FilterOptions& o) { return o.pattern.max_radius_px(); }
-std::int64_t samples_of(const FilterOptions& o) { return spiral_sample_count(spacing_of(o), radius_of(o)); }
+// The method's options, parsed once per call (spiral_config).
+struct SpiralConfig {
+  double spacing_px = 0;     // spiral_spacing_px: the blog's RAD_SCALE
+  double max_radius_px = 0;  // the pattern's k (N - 1) / 2: where the spiral ends
+  float clamp_factor = 0;    // spiral_clamp_factor
+  std::int64_t samples() const { return spiral_sample_count(spacing_px, max_radius_px); }
+  std::vector<SpiralSample> spiral() const { return spiral_samples(spacing_px, max_radius_px); }
+};
+
+SpiralConfig spiral_config(const FilterOptions& o) {
+  return {o.number("spiral_spacing_px"), o.pattern.max_radius_px(), static_cast<float>(o.number("spiral_clamp_factor"))};
+}
 
 }  // namespace
 
@@ -38,38 +50,40 @@ void declare_spiral(std::vector<Method>& methods) {
        "blog: 2)",
        2.0, 1.0, 16.0}};
   m.unsupported = [](const FilterOptions& o, int, int) -> std::string {
-    const std::int64_t n = samples_of(o);
+    const SpiralConfig c = spiral_config(o);
+    const std::int64_t n = c.samples();
     if (n > kMaxSpiralSamples)
       return fmt::format("the spiral to radius {} px at spacing {} px has {} samples, more than the {} allowed",
-                         radius_of(o), spacing_of(o), n, kMaxSpiralSamples);
+                         c.max_radius_px, c.spacing_px, n, kMaxSpiralSamples);
     return "";
   };
   m.cpu_reference = [](const CpuInput& in) {
+    const SpiralConfig c = spiral_config(in.options);
     const Image input = signed_coc_image(in.color, in.radius_px, in.depth_m, static_cast<float>(in.lens.focus_distance_m));
-    return spiral_blur(input, spiral_samples(spacing_of(in.options), radius_of(in.options)),
-                       static_cast<float>(in.options.number("spiral_clamp_factor")), in.threads);
+    return spiral_blur(input, c.spiral(), c.clamp_factor, in.threads);
   };
   m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) {
-    return make_spiral_gpu(frame, spiral_samples(spacing_of(o), radius_of(o)),
-                           static_cast<float>(o.number("spiral_clamp_factor")));
+    const SpiralConfig c = spiral_config(o);
+    return make_spiral_gpu(frame, c.spiral(), c.clamp_factor);
   };
   // prepare reads colour, depth and the packed CoC and writes RGBA; the spiral pass evaluates the
   // centre and every sample (each a bilinear fetch of four texels), reading the RGBA image and the table.
   m.work = [](const FilterOptions& o, int w, int h) {
-    const double px = static_cast<double>(w) * h, n = static_cast<double>(samples_of(o));
+    const double px = static_cast<double>(w) * h, n = static_cast<double>(spiral_config(o).samples());
     return std::vector<PassWork>{{"prepare", px, px * 36, px * 16},
                                  {"spiral", px * (n + 1), px * 16 + n * sizeof(SpiralSample), px * 16}};
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context*) {
+    const std::int64_t samples = spiral_config(o).samples();
     MemoryUse use;
     const std::uint64_t image = static_cast<std::uint64_t>(w) * h * 16;
-    const std::uint64_t table = std::max<std::uint64_t>(sizeof(SpiralSample), samples_of(o) * sizeof(SpiralSample));
+    const std::uint64_t table = std::max<std::uint64_t>(sizeof(SpiralSample), samples * sizeof(SpiralSample));
     use.bytes = image + table;
-    use.details = {{"signed_coc_bytes", image}, {"spiral_table_bytes", table}, {"spiral_samples", samples_of(o)}};
+    use.details = {{"signed_coc_bytes", image}, {"spiral_table_bytes", table}, {"spiral_samples", samples}};
     return use;
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
-    return static_cast<std::uint64_t>(w) * h * 16 + samples_of(o) * sizeof(SpiralSample);
+    return static_cast<std::uint64_t>(w) * h * 16 + spiral_config(o).samples() * sizeof(SpiralSample);
   };
   // The same table and the same float operations in the same order, none fused (`precise`); lavapipe
   // matches the CPU bit for bit (measured: 0). What Vulkan lets another GPU do differently: the CoC

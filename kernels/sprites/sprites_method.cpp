@@ -13,6 +13,8 @@ namespace bokeh::methods {
 
 namespace {
 
+// The method's options, parsed once per call into the settings sprite_bokeh and the GPU driver read
+// (the gather of the rest reads its gather_block itself: naive_config).
 SpriteSettings settings_of(const FilterOptions& o) {
   SpriteSettings s;
   s.threshold = static_cast<float>(o.number("sprite_threshold"));
@@ -64,7 +66,7 @@ void declare_sprites(std::vector<Method>& methods) {
         {"sprites", 0, px * 32, px * 32}};  // the gather into the target and back, plus the quads
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
-    const std::uint64_t sprites = static_cast<std::uint64_t>(std::max(1, o.integer("max_sprites"))) * sizeof(Sprite);
+    const std::uint64_t sprites = static_cast<std::uint64_t>(std::max(1, settings_of(o).max_sprites)) * sizeof(Sprite);
     std::uint64_t target = static_cast<std::uint64_t>(w) * h * 16;
     MemoryUse use;
     if (ctx) {
@@ -77,7 +79,7 @@ void declare_sprites(std::vector<Method>& methods) {
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
     const auto px = static_cast<std::uint64_t>(w) * h;
-    return px * 4 * sizeof(float) + std::min<std::uint64_t>(px, o.integer("max_sprites")) * sizeof(Sprite);
+    return px * 4 * sizeof(float) + std::min<std::uint64_t>(px, settings_of(o).max_sprites) * sizeof(Sprite);
   };
   // The same detection and sums as the CPU; the sprites land in another order (the atomic counter's),
   // and additive blending is exact up to rounding: a pixel covered by m sprites sums m + 1
@@ -85,7 +87,7 @@ void declare_sprites(std::vector<Method>& methods) {
   // sources whose disc reaches it: the largest radius's disc pixel count, or max_sprites. Plus
   // naive's 1e-5 for the gather.
   m.gpu_tolerance = [](const FilterOptions& o) {
-    const double overlap = std::min<double>(o.integer("max_sprites"), disc_pixel_count(o.pattern.max_radius_px()));
+    const double overlap = std::min<double>(settings_of(o).max_sprites, disc_pixel_count(o.pattern.max_radius_px()));
     return 1e-5 + 2.0 * overlap * std::ldexp(1.0, -24);
   };
   m.storage_tolerance = [](const FilterOptions&) { return 0.0; };

@@ -13,6 +13,7 @@
 #include <Imath/half.h>
 
 #include "circular_coefficients.hpp"
+#include "circular_config.hpp"
 #include "circular_separable.hpp"
 #include "method.hpp"
 #include "test_support.hpp"
@@ -600,6 +601,26 @@ TEST(CircularPrecision, NamesRoundTrip) {
        {IntermediatePrecision::f32, IntermediatePrecision::f16, IntermediatePrecision::bracketed10})
     EXPECT_EQ(intermediate_precision_from_string(to_string(p)), p);
   EXPECT_THROW(intermediate_precision_from_string("f8"), std::invalid_argument);
+}
+
+// circular<n>'s options as its functions read them: the far field its own n, the rest as chosen.
+TEST(CircularConfig, ReadsEveryOptionOnce) {
+  FilterOptions o = find_method("circular3").defaults({21, 2});
+  CircularFilterConfig c = circular_config(o, 3);
+  EXPECT_EQ(c.far_components, 3);
+  EXPECT_EQ(c.near_components, 3);  // the default: the method's own count
+  EXPECT_EQ(c.max_radius_px, 20);
+  EXPECT_EQ(c.precision, IntermediatePrecision::f32);
+  EXPECT_FALSE(c.adaptive);
+  o.precision = "bracketed10";
+  o.values["near_components"] = 1;
+  o.values["adaptive"] = 1;  // "on"
+  c = circular_config(o, 3);
+  EXPECT_EQ(c.near_components, 1);
+  EXPECT_EQ(c.precision, IntermediatePrecision::bracketed10);
+  EXPECT_TRUE(c.adaptive);
+  o.precision = "f8";
+  EXPECT_THROW(circular_config(o, 3), std::invalid_argument);
 }
 
 }  // namespace

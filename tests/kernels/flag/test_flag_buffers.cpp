@@ -394,7 +394,7 @@ TEST_P(GpuMatchesEmulation, WithinTheFormatsRoundingFreedom) {
 std::vector<GpuCase> all_gpu_cases() {
   std::vector<GpuCase> cases;
   for (LayerPrecision p : all_layer_precisions())
-    for (int scale : {1, 2, 4}) cases.push_back({p, scale});
+    for (int scale : flag_buffer_scales()) cases.push_back({p, scale});
   return cases;
 }
 
@@ -428,7 +428,7 @@ TEST(FlagReduced, ZeroRadiiGiveTheInputExactly) {
   Scene s = make_scene("hoops", 61, 43);  // odd sizes: partial blocks at the right and bottom edges
   std::fill(s.depth_m.pixels.begin(), s.depth_m.pixels.end(), static_cast<float>(s.lens.focus_distance_m));
   for (const char* precision : {"f32", "unorm10_bracketed"})
-    for (int scale : {1, 2, 4}) {
+    for (int scale : flag_buffer_scales()) {
       // Full-res bracketed layers hold the colours themselves, quantised: exact only through f32.
       if (scale == 1 && std::string(precision) != "f32") continue;
       FilterOptions o = flag_options({13, 2}, precision);

@@ -2,11 +2,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <optional>
+#include <string>
 
 #include "coc.hpp"
 #include "flag.hpp"
+#include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "gpu_test_support.hpp"
+#include "naive_config.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
 #include "run.hpp"
@@ -145,10 +150,12 @@ vk::DeviceInfo device_of_type(const char* type) {
 TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
   const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{201, 1}, "f32");
-  EXPECT_EQ(flag_horizontal_block(o, software, 81), 4);
-  EXPECT_EQ(flag_horizontal_block(o, software, 101), 2);
-  EXPECT_EQ(flag_horizontal_block(o, software, 200), 1);
-  EXPECT_EQ(flag_horizontal_block(o, gpu, 101), 1);
+  const std::optional<int> automatic = flag_config(o).horizontal_block;  // the option's default
+  ASSERT_FALSE(automatic);
+  EXPECT_EQ(flag_horizontal_block(automatic, software, 81), 4);
+  EXPECT_EQ(flag_horizontal_block(automatic, software, 101), 2);
+  EXPECT_EQ(flag_horizontal_block(automatic, software, 200), 1);
+  EXPECT_EQ(flag_horizontal_block(automatic, gpu, 101), 1);
   // The bounds are lavapipe's: elsewhere both configurations beyond them are made.
   const bool bounded = context().info().is_software();
   auto expect_refused_if_bounded = [bounded](gpu::GpuFrame& frame, const FilterOptions& options) {
@@ -173,14 +180,54 @@ TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
 TEST(FlagBins, AutoIsMaskedOnCpuDevicesUpTo32Layers) {
   const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{41, 2}, "f16");
-  EXPECT_TRUE(flag_masked_bins(o, software, 21));
-  EXPECT_TRUE(flag_masked_bins(o, software, 32));
-  EXPECT_FALSE(flag_masked_bins(o, software, 33));
-  EXPECT_FALSE(flag_masked_bins(o, gpu, 21));
+  auto bins = [&o] { return flag_config(o).horizontal_bins; };
+  EXPECT_TRUE(flag_masked_bins(bins(), software, 21));
+  EXPECT_TRUE(flag_masked_bins(bins(), software, 32));
+  EXPECT_FALSE(flag_masked_bins(bins(), software, 33));
+  EXPECT_FALSE(flag_masked_bins(bins(), gpu, 21));
   o.values["horizontal_bins"] = 2;  // "masked"
-  EXPECT_TRUE(flag_masked_bins(o, gpu, 81));
+  EXPECT_TRUE(flag_masked_bins(bins(), gpu, 81));
   o.values["horizontal_bins"] = 1;  // "indexed"
-  EXPECT_FALSE(flag_masked_bins(o, software, 21));
+  EXPECT_FALSE(flag_masked_bins(bins(), software, 21));
+}
+
+// The typed configs read every choice as the choice it names: the enums and parsers follow the
+// order of the choice lists the options declare.
+TEST(MethodConfig, EveryChoiceParsesAsTheOneItNames) {
+  FilterOptions flag = options_for("flag", GatherPattern{9, 2}, "r11g11b10f");
+  flag.buffer_scale = 2;
+  const std::map<std::string, FlagHorizontalBins> bins = {{"auto", FlagHorizontalBins::automatic},
+                                                          {"indexed", FlagHorizontalBins::indexed},
+                                                          {"masked", FlagHorizontalBins::masked}};
+  ASSERT_EQ(flag_horizontal_bins().size(), bins.size());
+  for (std::size_t i = 0; i < bins.size(); ++i) {
+    flag.values["horizontal_bins"] = static_cast<double>(i);
+    EXPECT_EQ(flag_config(flag).horizontal_bins, bins.at(flag_horizontal_bins()[i])) << flag_horizontal_bins()[i];
+  }
+  for (std::size_t i = 0; i < flag_horizontal_blocks().size(); ++i) {
+    const std::string& name = flag_horizontal_blocks()[i];
+    flag.values["horizontal_block"] = static_cast<double>(i);
+    const std::optional<int> block = flag_config(flag).horizontal_block;
+    EXPECT_EQ(block ? std::to_string(*block) : "auto", name);
+  }
+  const FlagConfig c = flag_config(flag);
+  EXPECT_EQ(c.precision, LayerPrecision::r11g11b10f);
+  EXPECT_EQ(c.buffer_scale, 2);
+  EXPECT_FALSE(c.adaptive);
+  flag.values["adaptive"] = 1;  // "on"
+  flag.values["adaptive_tile_px"] = 8;
+  EXPECT_TRUE(flag_config(flag).adaptive);
+  EXPECT_EQ(flag_config(flag).adaptive_tile_px, 8);
+  flag.precision = "f8";
+  EXPECT_THROW(flag_config(flag), std::invalid_argument);
+
+  FilterOptions naive = find_method("naive").defaults({9, 2});
+  for (std::size_t i = 0; i < naive_gather_blocks().size(); ++i) {
+    const std::string& name = naive_gather_blocks()[i];
+    naive.values["gather_block"] = static_cast<double>(i);
+    const std::optional<GatherBlock> block = naive_config(naive).gather_block;
+    EXPECT_EQ(block ? std::to_string(block->x) + "x" + std::to_string(block->y) : "auto", name);
+  }
 }
 
 // An HDR highlight above half-float's largest finite value (65504). f32 layers keep it exactly;

@@ -3,6 +3,7 @@
 
 #include "flag_memory.hpp"
 #include "flag_gpu.hpp"
+#include "flag_reduced.hpp"
 #include "method.hpp"
 #include "vk/memory.hpp"
 
@@ -76,7 +77,7 @@ TEST(FlagMemory, WholeTexelExtents) {
 TEST(FlagMemory, DriverAllocatesAtLeastTheTexels) {
   vk::Context ctx;
   for (LayerPrecision p : {LayerPrecision::f16, LayerPrecision::f32})
-    for (int scale : {1, 2, 4}) {
+    for (int scale : flag_buffer_scales()) {
       const auto e = flag_buffer_extent(1920, 1080, k41, scale);
       const auto bytes = vk::image_3d_requirement_bytes(ctx, layer_format(p), e.width, e.height, e.layers);
       const auto texels = flag_texel_bytes(1920, 1080, k41, p, scale);

@@ -1,0 +1,26 @@
+#pragma once
+// FLAG's options, parsed once from FilterOptions (the generic carrier the CLI and the sweeps fill):
+// every function of the method reads this instead of re-parsing strings and choice indices.
+#include <optional>
+
+#include "flag.hpp"
+#include "flag_gpu.hpp"
+#include "gather_pattern.hpp"
+#include "method.hpp"
+
+namespace bokeh {
+
+struct FlagConfig {
+  GatherPattern pattern;                      // full resolution (the 3D buffer's: reduced_pattern)
+  LayerPrecision precision = LayerPrecision::f32;
+  int buffer_scale = 1;                       // the 3D buffer at 1/buffer_scale resolution: flag_buffer_scales()
+  std::optional<int> horizontal_block;        // pixels per invocation of the GPU horizontal pass; empty: auto
+  FlagHorizontalBins horizontal_bins = FlagHorizontalBins::automatic;
+  bool adaptive = false;                      // adaptive = on (coc_tiles_gpu.hpp)
+  int adaptive_tile_px = 0;                   // adaptive: the tile-max CoC map's tile side, px of FLAG's grid
+};
+
+// Throws std::invalid_argument for an unknown precision, std::logic_error for a missing option.
+FlagConfig flag_config(const FilterOptions& options);
+
+}  // namespace bokeh
