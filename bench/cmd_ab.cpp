@@ -40,13 +40,7 @@ void add_ab_command(CLI::App& app) {
   cmd->add_option("baseline", o->baseline, "Build folder (or bokehbench binary) of the baseline")->required();
   cmd->add_option("candidate", o->candidate, "Build folder (or bokehbench binary) under test")->required();
   cmd->add_option("--sweep", o->sweep, "The sweep both builds serve: a command and its axis flags")->capture_default_str();
-  cmd->add_option("--threshold-pct", o->threshold_pct,
-                  "Smallest change that counts, in percent: slower only when the whole interval lies above it")
-      ->check(CLI::Range(0.1, 1000.0))
-      ->capture_default_str();
-  cmd->add_option("--confidence", o->run.rule.confidence, "Confidence of each point's interval")
-      ->check(CLI::Range(0.5, 0.9999))
-      ->capture_default_str();
+  add_verdict_flags(cmd, o->threshold_pct, o->run.rule.confidence);
   cmd->add_option("--min-pairs", o->run.rule.min_samples, "Pairs every point gets (fewer: inconclusive)")
       ->check(CLI::Range(2, 10000))
       ->capture_default_str();

@@ -51,13 +51,7 @@ void add_compare_command(CLI::App& app) {
   cmd->add_option("baseline", o->baseline, "Results file to compare against (a figure9 --json or sweep JSON file)")
       ->required();
   cmd->add_option("current", o->current, "Results file of the run under test")->required();
-  cmd->add_option("--threshold-pct", o->threshold_pct,
-                  "Smallest change that counts, in percent: slower only when the whole interval lies above it")
-      ->check(CLI::Range(0.0, 1000.0))
-      ->capture_default_str();
-  cmd->add_option("--confidence", o->confidence, "Confidence of each point's interval")
-      ->check(CLI::Range(0.5, 0.9999))
-      ->capture_default_str();
+  add_verdict_flags(cmd, o->threshold_pct, o->confidence);
   cmd->add_option("--min-samples", o->min_samples, "Fewer samples than this on a side: inconclusive")
       ->check(CLI::Range(2, 100000))
       ->capture_default_str();

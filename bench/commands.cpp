@@ -194,6 +194,16 @@ std::vector<Resolution> AxisFlags::frame_sizes() const {
   return out;
 }
 
+void add_verdict_flags(CLI::App* cmd, double& threshold_pct, double& confidence) {
+  cmd->add_option("--threshold-pct", threshold_pct,
+                  "Smallest change that counts, in percent: slower only when the whole interval lies above it")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  cmd->add_option("--confidence", confidence, "Confidence of each point's interval")
+      ->check(CLI::Range(0.5, 0.9999))
+      ->capture_default_str();
+}
+
 void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb) {
   budget_s = default_budget_s;
   max_buffer_mb = default_max_buffer_mb;

@@ -96,6 +96,8 @@ struct ExitStatus {
   int code = 0;
 };
 
+// --threshold-pct and --confidence, alike in compare and ab.
+void add_verdict_flags(CLI::App* cmd, double& threshold_pct, double& confidence);
 // Prints a comparison's verdicts (and writes them as JSON when json_out is set); throws ExitStatus
 // with the report's exit code when it is not 0 (compare and ab).
 void report_verdicts(const compare::Report& report, const std::string& json_out);

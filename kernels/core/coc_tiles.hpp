@@ -10,14 +10,12 @@
 //                   i^2 + j^2 <= D, so a gather bounded by D adds exactly what the whole pattern
 //                   adds, in the same order: the image is the same, bit for bit. D = 0: only each
 //                   pixel's own sample reaches it, the tile's output is its input.
-//   Z (flag_write_layer, FLAG only) the highest layer any vertical pass reads from the tile's rows
-//                   (-1: none), so FLAG's horizontal pass writes no layer nobody reads.
 // Tile S reaches tile T if the nearest pixels of the two can be a pattern offset inside S's largest
 // disc: with the pixel gaps gx, gy between them, gi = ceil(gx / k), gj = ceil(gy / k) must satisfy
 // gi, gj <= n and gi^2 + gj^2 <= M_S. That is necessary for any sample of S to reach T, so D never
 // misses a source (it may include a tile that cannot quite reach: a bound, never an error).
-// shaders/common/tile_max.comp, tile_reach.comp and shaders/flag/tile_layers.comp compute the same
-// integers on the GPU (tested equal).
+// shaders/common/tile_max.comp and tile_reach.comp compute the same integers on the GPU (tested equal).
+// FLAG's own use of the map (the layers a tile's rows need) is in kernels/flag/flag_tiles.hpp.
 #include <vector>
 
 #include "gather_pattern.hpp"
@@ -45,14 +43,8 @@ bool tile_reaches(int m, int dtx, int dty, int tile_px, const GatherPattern& pat
 // rgb / area, radius px), with the pattern's disc indices (capped at 2 n^2; a NaN radius counts 0).
 CocTiles coc_tiles(const Image& packed, const GatherPattern& pattern, int tile_px);
 
-// FLAG's layer write bound Z per tile: the largest min(isqrt(D_T), n) over the tiles T of the same
-// tile column with D_T > 0 whose vertical pass reaches the tile's rows (ceil(gap / k) <= that
-// layer), -1 when there is none. n: the highest layer allocated.
-std::vector<int> flag_write_layers(const CocTiles& tiles, int spacing_px, int half_n);
-
-// The pattern FLAG needs for a scene whose largest disc index is m: n' = min(isqrt(m), n), i.e.
-// n' + 1 layers. Its disc indices are capped at 2 n'^2 rather than 2 n^2; no source of the scene
-// covers a sample the cap changes, so FLAG gives the same image with n' + 1 layers as with n + 1.
-GatherPattern scene_sized_pattern(const GatherPattern& pattern, int scene_max_index);
+// ceil(gap / k): the samples between the nearest pixels of two tiles d tiles apart on one axis
+// ((|d| - 1) tile_px + 1 px apart; 0 for d = 0).
+int gap_samples(int d, int tile_px, int spacing_px);
 
 }  // namespace bokeh

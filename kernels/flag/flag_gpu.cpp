@@ -37,6 +37,7 @@
 #include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_reduced.hpp"
+#include "flag_tiles.hpp"
 #include "vk/spirv.hpp"
 
 namespace bokeh {

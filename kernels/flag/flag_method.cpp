@@ -11,6 +11,7 @@
 #include "flag_gpu.hpp"
 #include "flag_memory.hpp"
 #include "flag_reduced.hpp"
+#include "flag_tiles.hpp"
 #include "method.hpp"
 #include "vk/memory.hpp"
 

@@ -9,7 +9,7 @@ cd "$here"
 
 # Written through image_io.hpp by each back-end (<backend>_written_*): the closed forms are in the test.
 for build in build build-lean; do
-  BOKEH_IMAGE_IO_FIXTURES=$here "$root/$build/tests/test_image_io" --gtest_also_run_disabled_tests \
+  BOKEH_IMAGE_IO_FIXTURES=$here "$root/$build/tests/test_core" --gtest_also_run_disabled_tests \
     --gtest_filter=ImageIo.DISABLED_WriteFixtures
 done
 

@@ -17,6 +17,7 @@
 #include "coc_tiles_gpu.hpp"
 #include "flag.hpp"
 #include "flag_gpu.hpp"
+#include "flag_tiles.hpp"
 #include "gpu_test_support.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
