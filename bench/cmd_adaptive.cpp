@@ -199,7 +199,8 @@ void add_adaptive_command(CLI::App& app) {
   a.add_to(cmd, {Axis::scenes, Axis::methods}, {Axis::sizes, Axis::resolutions});
   o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px,
                                "The scenes' largest CoC radius in px, each measured at every value (sets the f-stop; "
-                               "below the pattern's largest radius, the worst case provisions more than needed)");
+                               "below the pattern's largest radius, the worst case provisions more than needed)")
+                   ->check(finite_number());
   o->method_options.add_to(cmd);
   o->sweep.add_to(cmd, 240);
   a.add_quick(cmd, "Small run for CI and tests (160x120, pattern 9x2, max CoC 4 px, 8 s)",

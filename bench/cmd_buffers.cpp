@@ -115,6 +115,7 @@ void add_buffers_command(CLI::App& app) {
   a.scenes = {"hoops"};  // precisions and scales: every one FLAG has
   a.add_to(cmd, {Axis::resolutions, Axis::sizes, Axis::precisions, Axis::scales}, {Axis::scenes});
   cmd->add_option("--budget-lines", o->budget_lines_mib, "Memory budgets (MiB) to report and draw")
+      ->check(finite_number())
       ->check(CLI::PositiveNumber);
   o->sweep.add_to(cmd, 240, 512);
   a.add_quick(cmd, "Small sweep for CI and tests (160x120, N = 9 and 13)",

@@ -25,6 +25,7 @@ void run_compare(const CompareOptions& o) {
   options.rule.min_samples = o.min_samples;
   options.normalise = o.normalise;
   options.times = o.times;
+  if (!o.json_out.empty()) check_writable_file(o.json_out, {o.baseline, o.current});
   const nlohmann::json baseline = compare::load_results(o.baseline), current = compare::load_results(o.current);
   const compare::Report report = compare::compare_results(baseline, current, options, o.baseline, o.current);
   report_verdicts(report, o.json_out);
@@ -33,11 +34,11 @@ void run_compare(const CompareOptions& o) {
 }  // namespace
 
 void report_verdicts(const compare::Report& report, const std::string& json_out) {
-  fmt::print("{}", compare::report_text(report));
-  if (!json_out.empty()) {
+  // The file first: if it cannot be written, the run fails before its last line states an exit status.
+  if (!json_out.empty())
     write_results(json_out, "bokehbench.compare", run_context(nullptr), compare::report_json(report));
-    fmt::print("wrote {}\n", json_out);
-  }
+  fmt::print("{}", compare::report_text(report));
+  if (!json_out.empty()) fmt::print("wrote {}\n", json_out);
   if (report.exit_code() != compare::kNoRegression) throw ExitStatus{report.exit_code()};
 }
 

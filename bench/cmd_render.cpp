@@ -122,8 +122,8 @@ void render(RenderOptions& o) {
   for (const auto& [key, value] : o.method_options.values_for({o.method})) options.values[key] = value;
   check_options(method, options);
   check_image_extension(o.out_path);
-  check_writable_file(o.out_path);
-  if (o.compare) check_writable_file(comparison_sheet_path(o));
+  check_writable_file(o.out_path, {o.color_path, o.depth_path, o.lens_path});
+  if (o.compare) check_writable_file(comparison_sheet_path(o), {o.color_path, o.depth_path, o.lens_path});
   if (o.fit_max_coc_px && !(std::isfinite(*o.fit_max_coc_px) && *o.fit_max_coc_px > 0))
     throw std::invalid_argument(fmt::format(
         "--fit-max-coc {} must be a finite number of pixels > 0 (the scene's largest CoC radius; for a sharp image "
@@ -217,6 +217,7 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--lens", o->lens_path,
                   "Lens JSON: focal_length_mm, f_stop, sensor_width_mm, focus_distance_m [, coc_model]")
       ->check(CLI::ExistingFile);
+  // Checked in render() with the radius's own message (NaN and infinities included).
   cmd->add_option("--fit-max-coc", o->fit_max_coc_px, "Set the f-stop so the scene's largest CoC radius is this many px");
   o->method_options.add_to(cmd);
   cmd->add_option("--device", o->device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
@@ -227,6 +228,7 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--max-buffer-mb", o->max_buffer_mb,
                   "Refuse (before building the scene) a configuration whose intermediates exceed this many MiB (0: no "
                   "limit; the device's and the host's memory are checked either way)")
+      ->check(finite_number())
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->callback([o] { render(*o); });

@@ -86,6 +86,7 @@ void add_tradeoff_command(CLI::App& app) {
   a.backends = {"gpu"};
   a.add_to(cmd, {Axis::sizes, Axis::methods}, {Axis::resolutions, Axis::scenes, Axis::backends});
   o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px, "The scene's largest CoC radius in px (sets the f-stop)")
+                   ->check(finite_number())
                    ->check(CLI::PositiveNumber);
   o->method_options.add_to(cmd);
   o->sweep.add_to(cmd, 240);

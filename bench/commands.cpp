@@ -1,6 +1,7 @@
 #include "commands.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -194,12 +195,29 @@ std::vector<Resolution> AxisFlags::frame_sizes() const {
   return out;
 }
 
+const CLI::Validator& finite_number() {
+  static const CLI::Validator validator(
+      [](std::string& text) -> std::string {
+        double value = 0;
+        try {
+          value = std::stod(text);
+        } catch (const std::exception&) {
+          return "'" + text + "' is not a number";
+        }
+        return std::isfinite(value) ? std::string() : "'" + text + "' is not a finite number";
+      },
+      "FINITE");
+  return validator;
+}
+
 void add_verdict_flags(CLI::App* cmd, double& threshold_pct, double& confidence) {
   cmd->add_option("--threshold-pct", threshold_pct,
                   "Smallest change that counts, in percent: slower only when the whole interval lies above it")
+      ->check(finite_number())
       ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
   cmd->add_option("--confidence", confidence, "Confidence of each point's interval")
+      ->check(finite_number())
       ->check(CLI::Range(0.5, 0.9999))
       ->capture_default_str();
 }
@@ -209,10 +227,12 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
   max_buffer_mb = default_max_buffer_mb;
   budget_option = cmd->add_option("--budget-s", budget_s, "Measuring time to aim for, all points together (each still gets "
                                           "its minimum samples)")
+      ->check(finite_number())
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--max-buffer-mb", max_buffer_mb,
                   "Skip (never allocate) points whose intermediates exceed this many MiB (0: no limit)")
+      ->check(finite_number())
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--cpu-threads", cpu_threads, "Threads for the CPU references (default: every core)")

@@ -96,6 +96,9 @@ struct ExitStatus {
   int code = 0;
 };
 
+// Refuses NaN and infinities in a number option: CLI11's Range and PositiveNumber let NaN through
+// (every comparison with NaN is false). Every floating-point option of every command checks it.
+const CLI::Validator& finite_number();
 // --threshold-pct and --confidence, alike in compare and ab.
 void add_verdict_flags(CLI::App* cmd, double& threshold_pct, double& confidence);
 // Prints a comparison's verdicts (and writes them as JSON when json_out is set); throws ExitStatus

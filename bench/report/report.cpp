@@ -252,6 +252,14 @@ void check_writable_file(const std::string& path) {
   }
 }
 
+void check_writable_file(const std::string& path, const std::vector<std::string>& inputs) {
+  check_writable_file(path);
+  std::error_code ec;
+  for (const auto& input : inputs)
+    if (!input.empty() && std::filesystem::equivalent(path, input, ec))
+      throw std::runtime_error(fmt::format("output '{}' is the input '{}': choose another output path", path, input));
+}
+
 void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix) {
   ensure_parent_dir(out_prefix);
   const std::string cmd = fmt::format("/usr/bin/python3 '{}/plots/{}' '{}' '{}'", BOKEH_SOURCE_DIR, script, json_path,

@@ -2,6 +2,7 @@
 // The one JSON writer: every results file is {schema, schema_version, context, ...} and is written
 // atomically (temp file + rename), so an interrupted run never leaves a half-written file.
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -42,6 +43,9 @@ void ensure_parent_dir(const std::string& path);
 // Before any work: throws std::runtime_error naming the path unless a file can be written there
 // (it is not a directory, its folder exists or can be created, and a file can be created in it).
 void check_writable_file(const std::string& path);
+// check_writable_file, and throws naming both unless `path` is none of the command's `inputs` (the
+// same file by any name): an output never replaces what the command reads.
+void check_writable_file(const std::string& path, const std::vector<std::string>& inputs);
 // The same for a folder that files will be written into (created if missing).
 void check_writable_dir(const std::string& dir);
 

@@ -161,10 +161,10 @@ Context::Context(const std::string& selector, const DeviceRequirements& wanted) 
     auto rank = [&](const DeviceInfo& d) { return 2 * preference(d) + (unmet_by(devices[d.index], wanted).empty() ? 0 : 1); };
     chosen = &*std::min_element(infos.begin(), infos.end(), [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
   } else if (std::all_of(selector.begin(), selector.end(), ::isdigit)) {
-    const int index = std::stoi(selector);
-    if (index < 0 || index >= static_cast<int>(infos.size()))
-      throw std::invalid_argument(fmt::format("--device {}: only {} device(s), see `bokehbench devices`", index, infos.size()));
-    chosen = &infos[index];
+    // Compared as text first: an index too long for an int names no device either.
+    if (selector.size() > 9 || std::stoi(selector) >= static_cast<int>(infos.size()))
+      throw std::invalid_argument(fmt::format("--device {}: only {} device(s), see `bokehbench devices`", selector, infos.size()));
+    chosen = &infos[std::stoi(selector)];
   } else {
     for (const auto& d : infos)
       if (d.name.find(selector) != std::string::npos) {
