@@ -12,6 +12,7 @@
 
 #include "accuracy.hpp"
 #include "commands.hpp"
+#include "intervals.hpp"
 #include "method.hpp"
 #include "report.hpp"
 #include "scene.hpp"
@@ -45,22 +46,16 @@ std::vector<std::string> adaptive_methods() {
 
 double median_ms(const nlohmann::json& point) { return point["frame_ms"]["median"].get<double>(); }
 
-// off / on of the samples the two points took in the same round: the machine's drift (a shared VM
-// moves by 2x within minutes) cancels in each ratio. Their median and quartiles.
-nlohmann::json paired_ratios(const nlohmann::json& off, const nlohmann::json& on) {
-  std::map<int, double> off_by_round;
-  for (std::size_t i = 0; i < off["samples_ms"].size(); ++i)
-    off_by_round[off["sample_rounds"][i].get<int>()] = off["samples_ms"][i].get<double>();
-  std::vector<double> ratios;
-  for (std::size_t i = 0; i < on["samples_ms"].size(); ++i)
-    if (auto it = off_by_round.find(on["sample_rounds"][i].get<int>());
-        it != off_by_round.end() && on["samples_ms"][i].get<double>() > 0)
-      ratios.push_back(it->second / on["samples_ms"][i].get<double>());
-  if (ratios.empty()) return nullptr;
-  return {{"median", runner::quantile(ratios, 0.5)},
-          {"q1", runner::quantile(ratios, 0.25)},
-          {"q3", runner::quantile(ratios, 0.75)},
-          {"rounds", ratios.size()}};
+// off / on of the samples the two points took side by side in the same round: the machine's drift
+// (a shared VM moves by 2x within minutes) cancels in each ratio. Their median with its 95% interval
+// (bootstrap over rounds, intervals.hpp).
+nlohmann::json paired_speedup(const nlohmann::json& off, const nlohmann::json& on) {
+  const RoundValues off_ms = round_values(off), on_ms = round_values(on);
+  const auto ratio = paired_ratio_interval(off_ms, on_ms);
+  if (!ratio) return nullptr;
+  std::size_t rounds = 0;
+  for (const auto& [round, ms] : on_ms) rounds += off_ms.count(round);
+  return {{"median", ratio->estimate}, {"low", ratio->low}, {"high", ratio->high}, {"rounds", rounds}};
 }
 
 nlohmann::json error_summary(const nlohmann::json& point) {
@@ -102,7 +97,7 @@ nlohmann::json comparisons_json(const nlohmann::json& points) {
         {"frame_ms_off", median_ms(w)},
         {"frame_ms_on", median_ms(on)},
         {"speedup", median_ms(on) > 0 ? median_ms(w) / median_ms(on) : 0.0},
-        {"speedup_same_round", paired_ratios(w, on)},
+        {"speedup_same_round", paired_speedup(w, on)},
         {"allocated_bytes_off", off_bytes},
         {"allocated_bytes_on", on_bytes},
         {"memory_saved_bytes", static_cast<double>(off_bytes) - static_cast<double>(on_bytes)},
@@ -163,10 +158,17 @@ void adaptive(AdaptiveOptions& o) {
               {"speedup", "median frame time off / on (frames include the CoC pass and, on, the tile-map passes)"},
               {"memory", "memory.allocated_bytes: what the filter allocated once prepared for the scene"},
               {"error", "each mode against the exact energy-sum scatter of the same scene and CoC"}};
+  // Off and on of one configuration side by side in every round: their speed-up is paired.
+  s.visit_together = [](const SweepPoint& p) {
+    FilterOptions o = p.options;
+    o.values.erase(kOption);
+    return fmt::format("{}/{}/{}/{}/{}", p.method->name, p.scene, p.resolution.text(), p.max_coc_px, o.precision) +
+           nlohmann::json(o.values).dump();
+  };
   s.derive = [](nlohmann::json& doc) { doc["comparisons"] = comparisons_json(doc["points"]); };
   s.summary = [](const nlohmann::json& doc) {
     fmt::print("\n{:<18} {:>7} {:<8} {:>9} {:>9} {:>8} {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n", "scene",
-               "max CoC", "method", "off ms", "on ms", "speed-up", "(same round, IQR)", "off alloc", "on alloc", "saved",
+               "max CoC", "method", "off ms", "on ms", "speed-up", "(paired, 95%)", "off alloc", "on alloc", "saved",
                "PSNR off", "PSNR on");
     for (const auto& c : doc["comparisons"]) {
       const auto& saved = c["memory_saved_fraction"];
@@ -174,7 +176,7 @@ void adaptive(AdaptiveOptions& o) {
       const std::string same_round =
           paired.is_null() ? std::string("-")
                            : fmt::format("{:.2f}x [{:.2f}-{:.2f}]", paired["median"].get<double>(),
-                                         paired["q1"].get<double>(), paired["q3"].get<double>());
+                                         paired["low"].get<double>(), paired["high"].get<double>());
       fmt::print("{:<18} {:>5.0f}px {:<8} {:>9.2f} {:>9.2f} {:>7.2f}x {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n",
                  c["scene"].get<std::string>(), c["max_coc_px"].get<double>(), c["method"].get<std::string>(),
                  c["frame_ms_off"].get<double>(), c["frame_ms_on"].get<double>(), c["speedup"].get<double>(), same_round,

@@ -42,10 +42,10 @@ def main(doc, prefix):
         colour = colours[m]
         paired = c.get("speedup_same_round")
         speedup = paired["median"] if paired else c["speedup"]
-        yerr = [[speedup - paired["q1"]], [paired["q3"] - speedup]] if paired else None
+        yerr = [[speedup - paired["low"]], [paired["high"] - speedup]] if paired else None
         ax_speed.bar(x_of(g, m), speedup, bar * 0.9, color=colour, yerr=yerr, capsize=3)
         ax_speed.annotate(f"{speedup:.2f}x\n{c['frame_ms_off']:.3g} -> {c['frame_ms_on']:.3g} ms",
-                          (x_of(g, m), paired["q3"] if paired else speedup), ha="center", va="bottom", fontsize=7)
+                          (x_of(g, m), paired["high"] if paired else speedup), ha="center", va="bottom", fontsize=7)
         for half, key, hatch in ((-1, "allocated_bytes_off", None), (1, "allocated_bytes_on", "//")):
             if c[key] > 0:  # a log axis has no 0: say it instead
                 ax_mem.bar(x_of(g, m, half), c[key] / 2**20, bar * 0.45, color=colour, hatch=hatch, edgecolor="black",
@@ -63,9 +63,9 @@ def main(doc, prefix):
             if p is not None:
                 ax_err.bar(x_of(g, m, half), p, bar * 0.45, color=colour, hatch=hatch, edgecolor="black", lw=0.3)
     ax_speed.axhline(1.0, color="grey", lw=0.8, ls=":")
-    tops = [(c["speedup_same_round"] or {}).get("q3", c["speedup"]) for c in comps]
+    tops = [(c["speedup_same_round"] or {}).get("high", c["speedup"]) for c in comps]
     ax_speed.set_ylim(0, max(tops + [1.0]) * 1.25)
-    ax_speed.set_ylabel("speed-up (worst case / adaptive,\nsame-round samples: median, IQR)")
+    ax_speed.set_ylabel("speed-up (worst case / adaptive,\npaired per round: median, 95% interval)")
     ax_mem.set_yscale("log")
     ax_mem.set_ylabel("allocated for the scene (MiB, log)")
     ax_err.set_ylabel("PSNR vs exact scatter (dB)")

@@ -1,68 +1,122 @@
 #!/usr/bin/python3
 """Plot results/figure9.json like the FLAG paper's Figure 9: frame time vs gather size.
 
-usage: plot_figure9.py FIGURE9_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
+usage: plot_figure9.py FIGURE9_JSON OUT_PREFIX
+  writes OUT_PREFIX.png/.svg: the paper's figure, naive gather vs FLAG;
+  and OUT_PREFIX_methods.png/.svg when the run measured other methods too.
 
-One row per backend (GPU and CPU times differ by orders of magnitude on a real GPU, so each gets
-its own axes). Left: linear axes, as in the paper. Right: log-log, where a power law is a straight
-line and the fitted exponent (legend) is its slope. Markers are medians over the interleaved
-samples; bars span the interquartile range; the pale band spans min..max.
+The paper's figure has one row per backend (GPU and CPU times differ by orders of magnitude on a
+real GPU, so each gets its own axes): frame time on linear axes, as in the paper; the same on log-log
+axes, where a power law is a straight line and the fitted exponent (legend) its slope; and naive /
+FLAG at each N. Markers are medians, bars and bands their 95% intervals (bootstrap over rounds).
+The other methods' figure has a log time axis, so that no curve flattens the rest.
 """
 
 import bokehplot
 import matplotlib.pyplot as plt
-from matplotlib.ticker import NullLocator
+from matplotlib.ticker import NullLocator, ScalarFormatter
+
+PAPER = ("naive", "flag")
 
 
 def label(series, point):
-    fits = series.get("fits", {})
-    fit = fits.get("larger_half") or fits.get("all_sizes")
+    fit = series["fits"].get("larger_half") or series["fits"].get("all_sizes")
     text = f"{series['method']} ({point['precision']})"
     if fit:
-        text += f"  ~N^{fit['exponent']:.2f}"
+        text += f"  ~N^{fit['estimate']:.2f} [{fit['low']:.2f}, {fit['high']:.2f}]"
     return text
 
 
-def main(doc, prefix):
+def draw_curves(ax, doc, backend, methods, colours):
+    for s in doc["series"]:
+        if s["backend"] != backend or s["method"] not in methods:
+            continue
+        point = next(p for p in doc["points"] if p["method"] == s["method"] and p["backend"] == backend)
+        med = [m["estimate"] for m in s["median_ms"]]
+        lo = [m["estimate"] - m["low"] for m in s["median_ms"]]
+        hi = [m["high"] - m["estimate"] for m in s["median_ms"]]
+        ax.errorbar(s["N"], med, yerr=[lo, hi], color=colours[s["method"]], marker="o", ms=4, capsize=3,
+                    label=label(s, point))
+
+
+def size_axis(ax, cfg, log):
+    ax.set_xlabel(f"gather size N (N x N samples at k = {cfg['spacing_px']} px)")
+    ax.grid(True, which="both", alpha=0.3)
+    if log:
+        ax.set_xscale("log")
+        ax.set_xticks(cfg["sizes"], [str(n) for n in cfg["sizes"]])
+        ax.xaxis.set_minor_locator(NullLocator())
+
+
+def where(doc, backend):
+    device = (doc["context"].get("device") or {}).get("name", "")
+    return f"GPU ({device})" if backend == "gpu" else "CPU references"
+
+
+def paper_figure(doc, prefix, backends, colours):
     cfg = doc["config"]
+    fig, axes = plt.subplots(len(backends), 3, figsize=(17, 4.8 * len(backends)), constrained_layout=True,
+                             squeeze=False)
+    for row, backend in zip(axes, backends):
+        for ax, log in zip(row[:2], (False, True)):
+            draw_curves(ax, doc, backend, PAPER, colours)
+            size_axis(ax, cfg, log)
+            ax.set_ylabel("frame time (ms): median, 95% interval")
+            if log:
+                ax.set_yscale("log")
+                ax.yaxis.set_major_formatter(ScalarFormatter())
+                ax.set_title(f"{where(doc, backend)}, log-log: slope = growth exponent (fit: larger half of N)",
+                             fontsize=9)
+            else:
+                ax.set_ylim(bottom=0)
+                ax.set_title(f"{where(doc, backend)}: frame time vs filter size (cf. FLAG paper Fig. 9)", fontsize=9)
+        row[0].legend(fontsize=8, loc="upper left")
+        ratios = sorted((r for r in doc["naive_over_flag"] if r["backend"] == backend), key=lambda r: r["N"])
+        ax = row[2]
+        if ratios:
+            n = [r["N"] for r in ratios]
+            ax.fill_between(n, [r["low"] for r in ratios], [r["high"] for r in ratios], color="tab:grey", alpha=0.3,
+                            lw=0, label="95% interval")
+            ax.plot(n, [r["naive_over_flag"] for r in ratios], "o-", color="black", ms=4,
+                    label="naive / FLAG (paired per round)")
+            ax.axhline(1, color="tab:red", lw=0.8, ls="--")
+            ax.legend(fontsize=8, loc="upper left")
+        size_axis(ax, cfg, False)
+        ax.set_ylim(bottom=0)
+        ax.set_ylabel("naive frame time / FLAG frame time")
+        ax.set_title(f"{where(doc, backend)}: FLAG's speed-up over the naive gather", fontsize=9)
+    h = doc.get("headlines", {})
+    verdict = "settled" if h.get("settled") else f"NOT settled ({h.get('stop_reason', '')})"
+    fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, {doc['measurement']['rounds']} interleaved "
+                 f"rounds, {verdict}: {bokehplot.context_line(doc)}", fontsize=9)
+    bokehplot.save(fig, prefix)
+
+
+def methods_figure(doc, prefix, backends, colours):
+    cfg = doc["config"]
+    methods = bokehplot.method_names(doc)
+    fig, axes = plt.subplots(1, len(backends), figsize=(8 * len(backends), 5.5), constrained_layout=True, squeeze=False)
+    for ax, backend in zip(axes[0], backends):
+        draw_curves(ax, doc, backend, methods, colours)
+        size_axis(ax, cfg, False)
+        ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(ScalarFormatter())
+        ax.set_ylabel("frame time (ms, log): median, 95% interval")
+        ax.set_title(f"{where(doc, backend)}: every method measured", fontsize=9)
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}: {bokehplot.context_line(doc)}", fontsize=9)
+    bokehplot.save(fig, prefix + "_methods")
+
+
+def main(doc, prefix):
     colours = bokehplot.method_colours(doc)
     backends = [b for b in ("gpu", "cpu") if any(s["backend"] == b for s in doc["series"])]
     if not backends:
         raise SystemExit("no measured points to plot")
-    fig, axes = plt.subplots(len(backends), 2, figsize=(13, 4.8 * len(backends)), constrained_layout=True,
-                             squeeze=False)
-    device = (doc["context"].get("device") or {}).get("name", "")
-    for row, backend in zip(axes, backends):
-        for ax, loglog in zip(row, (False, True)):
-            order = bokehplot.method_names(doc)
-            for s in sorted((s for s in doc["series"] if s["backend"] == backend), key=lambda s: order.index(s["method"])):
-                pts = sorted((p for p in doc["points"] if p["method"] == s["method"] and p["backend"] == backend),
-                             key=lambda p: p["N"])
-                n = [p["N"] for p in pts]
-                med = [p["frame_ms"]["median"] for p in pts]
-                lo = [p["frame_ms"]["median"] - p["frame_ms"]["q1"] for p in pts]
-                hi = [p["frame_ms"]["q3"] - p["frame_ms"]["median"] for p in pts]
-                colour = colours[s["method"]]
-                ax.errorbar(n, med, yerr=[lo, hi], color=colour, marker="o", ms=4, capsize=3, label=label(s, pts[0]))
-                ax.fill_between(n, [p["frame_ms"]["min"] for p in pts], [p["frame_ms"]["max"] for p in pts],
-                                color=colour, alpha=0.12, lw=0)
-            ax.set_xlabel(f"gather size N (N x N samples at k = {cfg['spacing_px']} px; max CoC radius = k(N-1)/2)")
-            ax.set_ylabel("frame time (ms, median; bars: IQR, band: min-max)")
-            ax.grid(True, which="both", alpha=0.3)
-            where = f"GPU ({device})" if backend == "gpu" else "CPU references"
-            if loglog:
-                ax.set_xscale("log")
-                ax.set_yscale("log")
-                ax.set_xticks(cfg["sizes"], [str(n) for n in cfg["sizes"]])
-                ax.xaxis.set_minor_locator(NullLocator())
-                ax.set_title(f"{where}, log-log: slope = growth exponent (fit: larger half of N)", fontsize=9)
-            else:
-                ax.set_title(f"{where}: frame time vs filter size (cf. FLAG paper Fig. 9)", fontsize=9)
-                ax.set_ylim(bottom=0)
-        row[0].legend(fontsize=8, loc="upper left")
-    fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, measured interleaved "
-                 f"({doc['measurement']['rounds']} rounds): {bokehplot.context_line(doc)}", fontsize=9)
-    bokehplot.save(fig, prefix)
+    if any(s["method"] in PAPER for s in doc["series"]):
+        paper_figure(doc, prefix, backends, colours)
+    if any(s["method"] not in PAPER for s in doc["series"]):
+        methods_figure(doc, prefix, backends, colours)
 
 
 if __name__ == "__main__":

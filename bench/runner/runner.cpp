@@ -161,10 +161,32 @@ void lead_in(Target& target, double frame_ms, const Policy& p) {
   target.measure(std::clamp(static_cast<int>(std::ceil(p.lead_in_ms / ms)), 1, p.max_frames_per_sample));
 }
 
-bool settled(const PointRecord& r, const Policy& p) {
+bool settled(const PointRecord& r, const Policy& p, bool by_headlines) {
   if (static_cast<int>(r.samples.size()) >= p.max_samples) return true;
-  if (static_cast<int>(r.samples.size()) < p.min_samples) return false;
+  if (by_headlines || static_cast<int>(r.samples.size()) < p.min_samples) return false;
   return distribution(r.frame_ms()).relative_iqr() <= p.settled_relative_iqr;
+}
+
+// This round's visiting order of the active points (Hooks::visit_group).
+std::vector<std::size_t> round_order(const std::vector<std::size_t>& active, const std::vector<std::size_t>& group,
+                                     int round, std::mt19937_64& rng) {
+  std::vector<std::size_t> order = active;
+  if (group.empty()) {
+    std::shuffle(order.begin(), order.end(), rng);
+    return order;
+  }
+  std::map<std::size_t, std::vector<std::size_t>> members;  // active points by group, in index order
+  for (std::size_t i : active) members[group.at(i)].push_back(i);
+  std::vector<std::size_t> groups;
+  for (const auto& [g, m] : members) groups.push_back(g);
+  std::shuffle(groups.begin(), groups.end(), rng);
+  order.clear();
+  for (std::size_t g : groups) {
+    std::vector<std::size_t>& m = members[g];
+    std::rotate(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(round % m.size()), m.end());
+    order.insert(order.end(), m.begin(), m.end());
+  }
+  return order;
 }
 
 }  // namespace
@@ -212,9 +234,9 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     drop(i);
   };
 
+  const bool by_headlines = static_cast<bool>(hooks.headlines_settled);
   for (int round = 0; !active.empty() && !interrupted(); ++round) {
-    std::vector<std::size_t> order = active;
-    std::shuffle(order.begin(), order.end(), rng);
+    const std::vector<std::size_t> order = round_order(active, hooks.visit_group, round, rng);
     record.round_order.push_back(order);
     for (auto& [name, probe] : hooks.probes) {
       if (round == 0) {
@@ -289,16 +311,25 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     for (std::size_t i : active) {
       PointRecord& rec = record.points[i];
       if (!rec.skipped.empty()) continue;
-      rec.settled = settled(rec, policy);
+      rec.settled = settled(rec, policy, by_headlines);
       if (rec.settled) drop(i); else still.push_back(i);
     }
     active = std::move(still);
     const bool everyone_has_min = std::all_of(active.begin(), active.end(), [&](std::size_t i) {
       return static_cast<int>(record.points[i].samples.size()) >= policy.min_samples;
     });
-    if (everyone_has_min && seconds_since(start) >= policy.budget_s) break;
+    if (active.empty()) {
+      record.stop_reason = by_headlines ? "max_samples reached" : "every point settled";
+    } else if (by_headlines && everyone_has_min && hooks.headlines_settled(record)) {
+      record.stop_reason = "headlines settled";
+      break;
+    } else if (everyone_has_min && seconds_since(start) >= policy.budget_s) {
+      record.stop_reason = "budget spent";
+      break;
+    }
   }
   record.status = interrupted() ? "interrupted" : "complete";
+  if (interrupted()) record.stop_reason = "interrupted";
   record.elapsed_s = seconds_since(start);
   return record;
 }

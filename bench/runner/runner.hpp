@@ -10,7 +10,8 @@
 //
 // A point leaves the rounds once it has min_samples and its relative IQR is at most
 // settled_relative_iqr, or at max_samples; rounds stop when no point is left, or when the budget is
-// spent and every point has min_samples.
+// spent and every point has min_samples. A command whose claims are figures derived from several
+// points (a ratio, a growth exponent) stops on those instead (Hooks::headlines_settled).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -80,6 +81,9 @@ struct RunRecord {
   std::map<std::string, std::vector<double>> probe_ms;  // per probe, one time per round
   std::map<std::string, std::vector<double>> probe_cpu_ms;  // per probe, its process CPU time per round
   std::string status = "partial";                       // partial (running), complete, interrupted
+  // Why the rounds ended: "every point settled", "headlines settled", "budget spent",
+  // "max_samples reached", "interrupted".
+  std::string stop_reason;
   double elapsed_s = 0;
 };
 
@@ -101,6 +105,16 @@ struct Hooks {
   std::function<void(const RunRecord& record)> checkpoint;
   // After every visit: where the run stands.
   std::function<void(const Progress& progress, const PointRecord& visited)> progress;
+  // visit_group[i]: points with the same value are visited back to back in every round (e.g. the
+  // methods compared at one size, so their ratio comes from adjacent measurements); the groups'
+  // order is shuffled and the order inside a group turns by one each round, so two points take
+  // turns going first. Empty: every point is a group of its own.
+  std::vector<std::size_t> visit_group;
+  // After every round from min_samples on: true ends the run (the command's headline figures are
+  // as tight as it asked). When set, no point leaves the rounds by its own IQR, since a figure
+  // drawn from several points needs them all in the same rounds; max_samples and the budget still
+  // end the run.
+  std::function<bool(const RunRecord& record)> headlines_settled;
 };
 
 // Warms `target` up as the rounds do (its own warm-up, a pilot frame, then batches as long as a

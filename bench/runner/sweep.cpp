@@ -235,6 +235,7 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
           {"pass_ms", pass_ms},
           {"samples_ms", frame},
           {"samples_cpu_ms", rec.cpu_ms()},
+          {"samples_pass_ms", pass_values},
           {"sample_rounds", rec.sample_round},
           {"frames_per_sample", rec.frames_per_sample},
           {"warm_up_ms", rec.warm_up_ms},
@@ -415,6 +416,7 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
       {"lead_in_ms", policy.lead_in_ms},
       {"extra_work_fraction", policy.extra_work_fraction},
       {"rounds", rec.round_order.size()},
+      {"stop_reason", rec.stop_reason},
       {"round_order", order},
       {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "
                  "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included; "
@@ -525,6 +527,11 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     last_write = std::chrono::steady_clock::now();
   };
   hooks.progress = progress_printer(measurable);
+  if (s.visit_together) {
+    std::map<std::string, std::size_t> groups;
+    for (const auto& p : points) hooks.visit_group.push_back(groups.emplace(s.visit_together(p), groups.size()).first->second);
+  }
+  hooks.headlines_settled = s.headlines_settled;
 
   fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),
              measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),

@@ -84,6 +84,12 @@ struct SweepSettings {
     std::function<Image()> make;
   };
   std::function<std::optional<ExtraReference>(const SweepPoint&, const Scene&, const Lens&)> extra_reference;
+  // Points visited back to back in every round (runner::Hooks::visit_group): those whose keys are
+  // equal. Empty: every point on its own.
+  std::function<std::string(const SweepPoint&)> visit_together;
+  // Ends the rounds once the command's headline figures are as tight as it asked
+  // (runner::Hooks::headlines_settled).
+  std::function<bool(const runner::RunRecord&)> headlines_settled;
   // Adds the command's derived results (fits, ratios, Pareto front) to the document.
   std::function<void(nlohmann::json& doc)> derive;
   // Prints the command's summary from the finished document.

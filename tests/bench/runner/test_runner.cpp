@@ -53,6 +53,8 @@ struct Harness {
   std::vector<std::vector<double>> jitter;
   std::uint64_t bytes = 0;
   std::vector<std::string> fail_on_prepare;  // per point: throw this text from prepare
+  std::vector<std::size_t> visit_group;                      // runner::Hooks::visit_group
+  std::function<bool(const RunRecord&)> headlines_settled;   // runner::Hooks::headlines_settled
 
   RunRecord run(const std::vector<double>& times, const Policy& policy, const std::vector<std::string>& skip = {},
                 std::function<void(const RunRecord&)> checkpoint = {}) {
@@ -69,6 +71,8 @@ struct Harness {
       return t;
     };
     hooks.checkpoint = std::move(checkpoint);
+    hooks.visit_group = visit_group;
+    hooks.headlines_settled = headlines_settled;
     return runner::run(names, skip, policy, hooks);
   }
 };
@@ -193,6 +197,53 @@ TEST(Runner, TheBudgetStopsRoundsOnceEveryPointHasItsMinimum) {
   p.budget_s = 0;  // spent from the start
   const RunRecord r = h.run({1, 1}, p);
   for (const auto& pt : r.points) EXPECT_EQ(pt.samples.size(), 3u);
+}
+
+TEST(Runner, TheBudgetOrSettlingIsTheRecordedStopReason) {
+  Harness spent, steady;
+  spent.jitter = {{0.0, 0.3}};
+  Policy p = fast_policy();
+  EXPECT_EQ(steady.run({1}, p).stop_reason, "every point settled");
+  p.budget_s = 0;
+  EXPECT_EQ(spent.run({1}, p).stop_reason, "budget spent");
+}
+
+// A group's points are visited back to back in every round and take turns going first, so a ratio
+// of theirs is measured side by side; the groups' order is still shuffled.
+TEST(Runner, PointsOfAGroupAreVisitedBackToBackTakingTurnsFirst) {
+  Harness h;
+  h.jitter.assign(6, {0.0, 0.3});
+  h.visit_group = {0, 1, 2, 0, 1, 2};  // pairs (0, 3), (1, 4), (2, 5)
+  const RunRecord r = h.run({1, 2, 3, 4, 5, 6}, fast_policy());
+  ASSERT_EQ(r.round_order.size(), 6u);
+  std::set<std::vector<std::size_t>> group_orders;
+  for (std::size_t round = 0; round < r.round_order.size(); ++round) {
+    const auto& order = r.round_order[round];
+    ASSERT_EQ(order.size(), 6u);
+    std::vector<std::size_t> groups;
+    for (std::size_t at = 0; at < 6; at += 2) {
+      EXPECT_EQ(h.visit_group[order[at]], h.visit_group[order[at + 1]]) << "round " << round;
+      const std::size_t first = std::min(order[at], order[at + 1]) == order[at] ? 0 : 1;
+      EXPECT_EQ(first, round % 2) << "round " << round << ": the lower index goes first in even rounds";
+      groups.push_back(h.visit_group[order[at]]);
+    }
+    group_orders.insert(groups);
+  }
+  EXPECT_GT(group_orders.size(), 1u) << "the groups' order is shuffled anew each round";
+}
+
+// A command whose claims are drawn from several points ends the rounds when they are tight: no point
+// leaves on its own IQR before (a ratio needs both points in the same rounds).
+TEST(Runner, HeadlinesSettledEndsTheRoundsAndKeepsEveryPointInThem) {
+  Harness h;
+  h.jitter = {{}, {0.0, 0.5, -0.3}};
+  Policy p = fast_policy();
+  p.max_samples = 20;
+  h.headlines_settled = [](const RunRecord& r) { return r.round_order.size() >= 4; };
+  const RunRecord r = h.run({2, 2}, p);
+  EXPECT_EQ(r.stop_reason, "headlines settled");
+  EXPECT_EQ(r.round_order.size(), 4u);
+  for (const auto& pt : r.points) EXPECT_EQ(pt.sample_round, (std::vector<int>{0, 1, 2, 3})) << pt.name;
 }
 
 TEST(Runner, DistributionMatchesHandComputedQuartiles) {
