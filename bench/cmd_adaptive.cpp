@@ -48,14 +48,16 @@ double median_ms(const nlohmann::json& point) { return point["frame_ms"]["median
 
 // off / on of the samples the two points took side by side in the same round: the machine's drift
 // (a shared VM moves by 2x within minutes) cancels in each ratio. Their median with its 95% interval
-// (bootstrap over rounds, intervals.hpp).
+// (bootstrap over rounds, intervals.hpp) and their quartiles.
 nlohmann::json paired_speedup(const nlohmann::json& off, const nlohmann::json& on) {
   const RoundValues off_ms = round_values(off), on_ms = round_values(on);
   const auto ratio = paired_ratio_interval(off_ms, on_ms);
   if (!ratio) return nullptr;
-  std::size_t rounds = 0;
-  for (const auto& [round, ms] : on_ms) rounds += off_ms.count(round);
-  return {{"median", ratio->estimate}, {"low", ratio->low}, {"high", ratio->high}, {"rounds", rounds}};
+  std::vector<double> ratios;
+  for (const auto& [round, ms] : on_ms)
+    if (auto it = off_ms.find(round); it != off_ms.end() && ms > 0) ratios.push_back(it->second / ms);
+  return {{"median", ratio->estimate}, {"low", ratio->low}, {"high", ratio->high},
+          {"q1", runner::quantile(ratios, 0.25)}, {"q3", runner::quantile(ratios, 0.75)}, {"rounds", ratios.size()}};
 }
 
 nlohmann::json error_summary(const nlohmann::json& point) {

@@ -69,7 +69,7 @@ std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, cons
 enum class Metric { wall, cpu };
 
 // The figures of one metric with their intervals: per method and backend (registry order, GPU
-// first) the medians and the growth exponents over all sizes and over the larger half (where fixed
+// first) the medians (and the median relative IQR of its points) and the growth exponents over all sizes and over the larger half (where fixed
 // costs such as the CoC pass no longer dominate; per pass too, on the GPU), and naive/FLAG at each
 // N; `settled` and `unsettled` against the targets (the ratios and the larger-half exponents).
 struct Figures {
@@ -105,22 +105,30 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
         if (p.method == m.name && p.backend == backend) pts.push_back(&p);
       if (pts.empty()) continue;
       std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
-      std::vector<double> n;
+      std::vector<double> n, medians, low, high, iqr;
       std::vector<const RoundValues*> curve;
-      nlohmann::json medians = nlohmann::json::array();
       for (const auto* p : pts) {
         n.push_back(p->n);
         curve.push_back(&values(*p));
-        if (!headlines_only)
-          medians.push_back(interval_json(bootstrap.interval([&](const std::vector<int>& d) { return median_over(values(*p), d); })));
+        std::vector<double> samples;
+        for (const auto& [round, ms] : values(*p)) samples.push_back(ms);
+        iqr.push_back(runner::distribution(samples).relative_iqr());
+        const Interval median =
+            headlines_only ? Interval{}
+                           : bootstrap.interval([&](const std::vector<int>& d) { return median_over(values(*p), d); });
+        medians.push_back(runner::quantile(samples, 0.5));
+        low.push_back(median.low);
+        high.push_back(median.high);
       }
       nlohmann::json fits = nlohmann::json::object();
       const std::size_t half = n.size() / 2;
       for (auto [name, from] : {std::pair{"all_sizes", std::size_t{0}}, std::pair{"larger_half", half}}) {
         if (n.size() - from < 2 || (headlines_only && from == 0)) continue;
         const Interval b = exponent(curve, n, from);
-        fits[name] = interval_json(b);
-        fits[name]["N"] = std::vector<double>(n.begin() + static_cast<std::ptrdiff_t>(from), n.end());
+        const auto at = static_cast<std::ptrdiff_t>(from);
+        const PowerLawFit fit = fit_power_law({n.begin() + at, n.end()}, {medians.begin() + at, medians.end()});
+        fits[name] = {{"exponent", fit.exponent}, {"low", b.low}, {"high", b.high}, {"coefficient_ms", fit.coefficient},
+                      {"r_squared", fit.r_squared}, {"points", fit.points}, {"N", std::vector<double>(n.begin() + at, n.end())}};
         if (name == std::string("larger_half") && !(b.half_width() <= target_exponent))
           out.unsettled.push_back(fmt::format("{} {} exponent {:.2f} +-{:.2f}", m.name, backend, b.estimate, b.half_width()));
       }
@@ -132,8 +140,11 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
             if (auto it = p->pass_ms.find(pass); it != p->pass_ms.end()) pass_curve.push_back(&it->second);
           if (pass_curve.size() == pts.size()) pass_fits[pass] = interval_json(exponent(pass_curve, n, half));
         }
+      std::sort(iqr.begin(), iqr.end());
       out.series.push_back({{"method", m.name}, {"backend", backend}, {"N", n}, {"median_ms", medians},
-                            {"fits", fits}, {"pass_fits_larger_half", pass_fits}});
+                            {"median_ms_low", low}, {"median_ms_high", high},
+                            {"median_relative_iqr", iqr[iqr.size() / 2]}, {"fits", fits},
+                            {"pass_fits_larger_half", pass_fits}});
     }
   for (const auto& a : points) {
     if (a.method != "naive") continue;
@@ -185,7 +196,11 @@ void print_summary(const nlohmann::json& doc) {
              "larger half of N", "all N");
   for (const auto& series : doc["series"]) {
     const auto& f = series["fits"];
-    auto exponent = [&](const char* which) { return f.contains(which) ? with_interval(f[which], "{:.2f}") : std::string("-"); };
+    auto exponent = [&](const char* which) {
+      if (!f.contains(which)) return std::string("-");
+      return fmt::format("{:.2f} [{:.2f}, {:.2f}]", f[which]["exponent"].get<double>(), f[which]["low"].get<double>(),
+                         f[which]["high"].get<double>());
+    };
     fmt::print("{:<10} {:<4} {:>22} {:>22}\n", series["method"].get<std::string>(), series["backend"].get<std::string>(),
                exponent("larger_half"), exponent("all_sizes"));
     for (const auto& [pass, b] : series["pass_fits_larger_half"].items())

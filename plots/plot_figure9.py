@@ -23,7 +23,7 @@ def label(series, point):
     fit = series["fits"].get("larger_half") or series["fits"].get("all_sizes")
     text = f"{series['method']} ({point['precision']})"
     if fit:
-        text += f"  ~N^{fit['estimate']:.2f} [{fit['low']:.2f}, {fit['high']:.2f}]"
+        text += f"  ~N^{fit['exponent']:.2f} [{fit['low']:.2f}, {fit['high']:.2f}]"
     return text
 
 
@@ -32,9 +32,9 @@ def draw_curves(ax, doc, backend, methods, colours):
         if s["backend"] != backend or s["method"] not in methods:
             continue
         point = next(p for p in doc["points"] if p["method"] == s["method"] and p["backend"] == backend)
-        med = [m["estimate"] for m in s["median_ms"]]
-        lo = [m["estimate"] - m["low"] for m in s["median_ms"]]
-        hi = [m["high"] - m["estimate"] for m in s["median_ms"]]
+        med = s["median_ms"]
+        lo = [m - low for m, low in zip(med, s["median_ms_low"])]
+        hi = [high - m for m, high in zip(med, s["median_ms_high"])]
         ax.errorbar(s["N"], med, yerr=[lo, hi], color=colours[s["method"]], marker="o", ms=4, capsize=3,
                     label=label(s, point))
 
