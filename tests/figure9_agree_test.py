@@ -1,0 +1,37 @@
+#!/usr/bin/python3
+"""bench/figure9_agree.py on a real figure9 result: a run agrees with itself; a copy whose first
+naive/FLAG ratio (with its interval) moved by 20%, or whose first exponent moved by 0.2, does not.
+
+usage: figure9_agree_test.py AGREE_SCRIPT FIGURE9_JSON SCRATCH_DIR
+"""
+import copy
+import json
+import os
+import subprocess
+import sys
+
+script, results, scratch = sys.argv[1:4]
+doc = json.load(open(results))
+
+
+def agree(other):
+    path = os.path.join(scratch, "figure9_agree_other.json")
+    with open(path, "w") as f:
+        json.dump(other, f)
+    return subprocess.run([sys.executable, script, results, path], capture_output=True, text=True)
+
+
+same = agree(doc)
+assert same.returncode == 0, same.stdout + same.stderr
+moved_ratio = copy.deepcopy(doc)
+for key in ("naive_over_flag", "low", "high"):
+    moved_ratio["naive_over_flag"][0][key] *= 1.2
+r = agree(moved_ratio)
+assert r.returncode == 1 and "DIFFER" in r.stdout, r.stdout
+moved_exponent = copy.deepcopy(doc)
+fit = next(s["fits"]["larger_half"] for s in moved_exponent["series"] if "larger_half" in s["fits"])
+for key in ("exponent", "low", "high"):
+    fit[key] += 0.2
+r = agree(moved_exponent)
+assert r.returncode == 1 and "DIFFER" in r.stdout, r.stdout
+print("figure9_agree: self agrees; a 20% ratio shift and a 0.2 exponent shift are told apart")
