@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "compare.hpp"
 #include "paired.hpp"
+#include "report.hpp"
 
 namespace bokeh {
 
@@ -19,6 +20,8 @@ struct AbOptions {
 };
 
 void run_ab(AbOptions& o) {
+  // Before any measuring: a file that cannot be written fails now, not after the pairs (and never after a verdict).
+  if (!o.json_out.empty()) check_writable_file(o.json_out);
   o.run.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
   o.run.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
   o.run.rule.threshold = o.threshold_pct / 100;

@@ -237,6 +237,9 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
       ->capture_default_str();
   cmd->add_option("--cpu-threads", cpu_threads, "Threads for the CPU references (default: every core)")
       ->check(CLI::Range(1, 1024));
+  cmd->add_flag("--run-over-budget", run_over_budget,
+                "Run points whose single frame is estimated to take longer than --budget-s (by default they are "
+                "skipped before anything runs, with the estimate: their taps at a ceiling rate)");
   cmd->add_option("--device", device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--seed", seed, "Seed of the shuffled measuring order")->capture_default_str();
   cmd->add_option("--out-dir", out_dir, "Where the results files go")->capture_default_str();
@@ -261,6 +264,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.device = device;
   s.cpu_threads = cpu_threads;
   s.max_buffer_mb = max_buffer_mb;
+  s.frame_budget_s = run_over_budget ? 0.0 : budget_s;
   s.plot = plot;
   s.policy.budget_s = budget_s;
   s.policy.seed = seed;

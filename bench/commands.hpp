@@ -81,6 +81,7 @@ struct SweepFlags {
   int inject_slowdown_pct = 0;  // a test of `compare` only (selftest-compare); 0: off
   bool plot = true;
   bool serve = false;  // a worker of `bokehbench ab` (paired.hpp)
+  bool run_over_budget = false;  // run points whose one frame is estimated above the budget
   CLI::Option* budget_option = nullptr;
   void add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb = 0);
   SweepSettings settings(const std::string& name, const std::string& plot_script) const;

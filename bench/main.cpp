@@ -1,5 +1,8 @@
 // bokehbench: benchmarks and checks bokeh depth-of-field filters (see README.md).
+#include <cerrno>
 #include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <new>
 
@@ -7,7 +10,20 @@
 
 #include "commands.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+// The exit status states what the output says: output that could not be written (a full disk, a closed
+// pipe, stdout redirected to /dev/full) lost its last lines, the verdict among them, so the run fails.
+int with_output_written(int code) {
+  if (std::fflush(stdout) == 0 && !std::ferror(stdout)) return code;
+  if (code != 0) return code;  // already a failure (or a verdict other than 0), reported on stderr
+  const int error = errno;
+  fmt::print(stderr, "bokehbench: error: cannot write standard output ({}): its last lines are lost\n",
+             error != 0 ? std::strerror(error) : "a write failed");
+  return 1;
+}
+
+int run(int argc, char** argv) {
   CLI::App app{"bokehbench: cost, memory and accuracy of bokeh depth-of-field filters"};
   app.require_subcommand(1);
   bokeh::add_figure9_command(app);
@@ -39,3 +55,7 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return with_output_written(run(argc, argv)); }

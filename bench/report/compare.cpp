@@ -12,6 +12,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "text_file.hpp"
+
 namespace bokeh::compare {
 
 using json = nlohmann::json;
@@ -455,15 +457,10 @@ std::vector<std::string> json_differences(const json& baseline, const json& curr
 }
 
 json load_results(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    std::error_code ec;
-    throw std::runtime_error(std::filesystem::exists(path, ec) ? fmt::format("{}: cannot be read", path)
-                                                                 : fmt::format("{}: no such file", path));
-  }
+  const std::string text = read_text_file(path, "results file");
   json doc;
   try {
-    doc = json::parse(in);
+    doc = json::parse(text);
   } catch (const json::parse_error& e) {
     throw std::runtime_error(fmt::format("{}: not valid JSON ({})", path, e.what()));
   }

@@ -208,21 +208,6 @@ void ensure_parent_dir(const std::string& path) {
   if (!parent.empty()) std::filesystem::create_directories(parent);
 }
 
-int remove_stale_temporaries(const std::string& dir) {
-  std::error_code ec;
-  int removed = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    const auto dot = name.rfind(".tmp.");
-    if (dot == std::string::npos) continue;
-    const std::string pid = name.substr(dot + 5);
-    if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos) continue;
-    if (::kill(static_cast<pid_t>(std::stol(pid)), 0) == 0 || errno != ESRCH) continue;  // still running
-    if (std::filesystem::remove(entry.path(), ec)) ++removed;
-  }
-  return removed;
-}
-
 void check_writable_dir(const std::string& dir) {
   const std::filesystem::path folder = dir.empty() ? std::filesystem::path(".") : std::filesystem::path(dir);
   std::error_code ec;
@@ -254,10 +239,9 @@ void check_writable_file(const std::string& path) {
 
 void check_writable_file(const std::string& path, const std::vector<std::string>& inputs) {
   check_writable_file(path);
-  std::error_code ec;
-  for (const auto& input : inputs)
-    if (!input.empty() && std::filesystem::equivalent(path, input, ec))
-      throw std::runtime_error(fmt::format("output '{}' is the input '{}': choose another output path", path, input));
+  // Every later write (write_file_atomically) refuses these too, whatever writes it.
+  protect_inputs(inputs);
+  refuse_input_as_output(path, inputs);
 }
 
 void run_plot_script(const std::string& script, const std::string& json_path, const std::string& out_prefix) {
@@ -271,15 +255,7 @@ void run_plot_script(const std::string& script, const std::string& json_path, co
 
 void write_text_atomically(const std::string& path, const std::string& text) {
   ensure_parent_dir(path);
-  const std::string tmp = fmt::format("{}.tmp.{}", path, ::getpid());
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error(fmt::format("cannot write '{}'", tmp));
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error(fmt::format("writing '{}' failed", tmp));
-  }
-  std::filesystem::rename(tmp, path);
+  write_text_file_atomically(path, text);
 }
 
 void write_results(const std::string& path, const std::string& schema_name, const nlohmann::json& context,

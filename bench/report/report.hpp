@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "atomic_file.hpp"
 #include "vk/context.hpp"
 
 namespace bokeh {
@@ -29,13 +30,10 @@ nlohmann::json device_json(const vk::DeviceInfo& device);
 void write_results(const std::string& path, const std::string& schema_name, const nlohmann::json& context,
                    const nlohmann::json& body);
 
-// Writes `text` to `path` through a temporary file beside it and a rename: readers see the old
-// file or the new one, never a part (the temporary's name is unique to this process).
+// Writes `text` to `path` through write_text_file_atomically (kernels/core/atomic_file.hpp): a temporary
+// beside it, fsync and a rename; readers see the old file or the new one, never a part, and a failed write
+// leaves the old file and no temporary. remove_stale_temporaries (same header) clears those of killed runs.
 void write_text_atomically(const std::string& path, const std::string& text);
-
-// Removes the temporaries write_text_atomically left in `dir` when a process died mid-write (SIGKILL):
-// files named *.tmp.PID whose process no longer runs. Returns how many were removed.
-int remove_stale_temporaries(const std::string& dir);
 
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);
@@ -44,7 +42,8 @@ void ensure_parent_dir(const std::string& path);
 // (it is not a directory, its folder exists or can be created, and a file can be created in it).
 void check_writable_file(const std::string& path);
 // check_writable_file, and throws naming both unless `path` is none of the command's `inputs` (the
-// same file by any name): an output never replaces what the command reads.
+// same file by any name): an output never replaces what the command reads. The inputs stay protected
+// (protect_inputs): every later atomic write of this process refuses them as targets.
 void check_writable_file(const std::string& path, const std::vector<std::string>& inputs);
 // The same for a folder that files will be written into (created if missing).
 void check_writable_dir(const std::string& dir);

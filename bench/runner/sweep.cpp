@@ -475,7 +475,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   remove_stale_temporaries(s.out_dir);
   if (s.plot && !s.plot_script.empty()) check_writable_dir(s.plots_dir);
   const SweepFiles files(s.out_dir, s.name);
-  SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb);
+  SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb, s.frame_budget_s);
   vk::Context* ctx = targets.context();
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
   nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);

@@ -72,6 +72,9 @@ struct SweepSettings {
   std::string device;
   runner::Policy policy;
   double max_buffer_mb = 0;  // > 0: points whose intermediates exceed this many MiB are skipped unallocated
+  // > 0: points whose one frame is estimated above this many seconds are skipped (SweepTargets; the
+  // commands set it to --budget-s unless --run-over-budget).
+  double frame_budget_s = 0;
   int cpu_threads = 0;       // 0: every core
   bool plot = true;
   // Answer a paired comparison's requests on stdin instead of running the rounds (paired.hpp).

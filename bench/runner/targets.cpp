@@ -1,6 +1,11 @@
 #include "targets.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <thread>
+
+#include <fmt/format.h>
 
 #include "coc.hpp"
 #include "parallel.hpp"
@@ -59,10 +64,59 @@ nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
   return out;
 }
 
+constexpr double kCpuTapsPerThreadCeiling = 1e10;
+constexpr double kGpuTapsCeiling = 1e13;
+
+std::string duration_words(double s) {
+  if (s < 120) return fmt::format("{:.0f} s", s);
+  if (s < 7200) return fmt::format("{:.1f} min", s / 60);
+  if (s < 2 * 86400) return fmt::format("{:.1f} h", s / 3600);
+  return fmt::format("{:.1f} days", s / 86400);
+}
+
+// 1.1e13, 2e10: the exponent without '+' and leading zeros.
+std::string sci(double v) {
+  std::string text = fmt::format("{:.2g}", v);
+  const auto e = text.find('e');
+  if (e == std::string::npos) return text;
+  std::string exponent = text.substr(e + 1);
+  const bool negative = exponent[0] == '-';
+  exponent.erase(0, exponent.find_first_not_of("+-0"));
+  return text.substr(0, e) + "e" + (negative ? "-" : "") + exponent;
+}
+
+// The threads lavapipe runs a dispatch on: LP_NUM_THREADS when set, else every core.
+int lavapipe_threads() {
+  if (const char* env = std::getenv("LP_NUM_THREADS"); env && std::atoi(env) > 0) return std::atoi(env);
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
 }  // namespace
 
+FrameTimeFloor frame_time_floor(double taps, bool on_cpu, int threads) {
+  FrameTimeFloor f;
+  f.taps = taps;
+  if (on_cpu) {
+    f.taps_per_s = kCpuTapsPerThreadCeiling * std::max(1, threads);
+    f.rate = fmt::format("{} taps/s a CPU thread x {} thread{}", sci(kCpuTapsPerThreadCeiling), threads,
+                         threads == 1 ? "" : "s");
+  } else {
+    f.taps_per_s = kGpuTapsCeiling;
+    f.rate = fmt::format("{} taps/s, above any GPU's gather", sci(kGpuTapsCeiling));
+  }
+  f.seconds = taps / f.taps_per_s;
+  return f;
+}
+
+std::string over_frame_budget(const FrameTimeFloor& floor, double budget_s) {
+  if (!(budget_s > 0) || floor.seconds <= budget_s) return {};
+  return fmt::format("estimated at least {} for one frame ({} taps at <= {} taps/s: {}), over the budget of {} s "
+                     "(--run-over-budget runs it anyway)",
+                     duration_words(floor.seconds), sci(floor.taps), sci(floor.taps_per_s), floor.rate, budget_s);
+}
+
 SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::string& device, int cpu_threads,
-                           double max_buffer_mb)
+                           double max_buffer_mb, double frame_budget_s)
     : points_(points), threads_(cpu_threads > 0 ? cpu_threads : default_cpu_threads()), plans_(points.size()) {
   if (const auto wanted = gpu_requirements(points)) ctx_.emplace(device, *wanted);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -80,6 +134,13 @@ SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::str
       const MemoryUse& use = plan.intermediates;
       if (plan.sized) plans_[i].memory = {{"bytes", use.bytes}, {"from_driver", use.from_driver}};
       if (plan.sized && p.backend == "gpu") plans_[i].memory["details"] = use.details;
+      // Time: a frame that cannot fit the budget even at a ceiling rate is said up front, never started.
+      if (plans_[i].skip.empty() && frame_budget_s > 0) {
+        const bool on_cpu = p.backend == "cpu" || (context() && context()->info().is_software());
+        const int threads = p.backend == "cpu" ? threads_ : lavapipe_threads();
+        plans_[i].skip =
+            over_frame_budget(frame_time_floor(plans_[i].work["taps"].get<double>(), on_cpu, threads), frame_budget_s);
+      }
     } catch (const std::exception& e) {
       plans_[i].skip = e.what();
     }

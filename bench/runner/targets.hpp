@@ -64,10 +64,28 @@ struct PointPlan {
   nlohmann::json work = nlohmann::json::object(), memory = nlohmann::json::object();
 };
 
+// A lower bound on one frame's time, from the point's work model: its taps (every pass, the CoC pass
+// included) at a ceiling rate, above what any measured method reaches. CPU (the references, and
+// lavapipe, which runs on the CPU): 1e10 taps/s a thread, twice the fastest measured (naive's CPU
+// gather, ~5e9 taps/s a thread on a 2.1 GHz EPYC with AVX2; README, "Every method at its best");
+// a hardware GPU: 1e13 taps/s. `threads`: the CPU threads the point runs on.
+struct FrameTimeFloor {
+  double taps = 0, taps_per_s = 0, seconds = 0;
+  std::string rate;  // how the rate was set, e.g. "1e10 taps/s a CPU thread x 2 threads"
+};
+FrameTimeFloor frame_time_floor(double taps, bool on_cpu, int threads);
+// "" when the floor fits the budget; else why the point is skipped: "estimated at least 2.4 h for one
+// frame (8.5e12 taps at <= 2e10 taps/s: 1e10 taps/s a CPU thread x 2 threads), over the budget of 300 s
+// (--run-over-budget runs it anyway)".
+std::string over_frame_budget(const FrameTimeFloor& floor, double budget_s);
+
 class SweepTargets {
  public:
   // Opens the device when a point runs on the GPU (with what those points need) and plans every point.
-  SweepTargets(const std::vector<SweepPoint>& points, const std::string& device, int cpu_threads, double max_buffer_mb);
+  // frame_budget_s > 0: a point whose one frame is estimated above it is skipped, with the estimate
+  // (frame_time_floor); 0: no time check.
+  SweepTargets(const std::vector<SweepPoint>& points, const std::string& device, int cpu_threads, double max_buffer_mb,
+               double frame_budget_s = 0);
   const std::vector<PointPlan>& plans() const { return plans_; }
   vk::Context* context() { return ctx_ ? &*ctx_ : nullptr; }
   int cpu_threads() const { return threads_; }

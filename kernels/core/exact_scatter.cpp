@@ -4,7 +4,6 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
-#include <random>
 #include <stdexcept>
 #include <unordered_map>
 #include <vector>
@@ -20,6 +19,11 @@ namespace {
 // Bump when the reference changes, so stale cache files are never read back.
 constexpr std::string_view kAlgorithmVersion =
     "exact_scatter v1: analytic coverage; additive-saturating layers; own surface continued behind nearer pixels";
+// Bump when what a cache entry stores changes (2: the key and a pixel hash in the EXR header, checked on read).
+constexpr std::string_view kCacheFormat = "reference cache format 2";
+// The EXR header attributes of a cache entry: the key it was computed for, and a hash of its pixels.
+constexpr const char* kKeyAttribute = "bokehReferenceKey";
+constexpr const char* kPixelsAttribute = "bokehReferencePixels";
 
 // ---- Disc / unit-square intersection, exact in closed form -------------------------------------------
 // Disc of radius r centred at the origin. All offsets are from the source pixel's centre, so target
@@ -314,6 +318,7 @@ std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, cons
                                 ScatterComposite mode) {
   std::uint64_t hash = 14695981039346656037ull;
   fnv1a(hash, kAlgorithmVersion.data(), kAlgorithmVersion.size());
+  fnv1a(hash, kCacheFormat.data(), kCacheFormat.size());
   const int mode_id = static_cast<int>(mode);
   fnv1a(hash, &mode_id, sizeof mode_id);
   fnv1a_image(hash, color);
@@ -330,25 +335,49 @@ std::filesystem::path ExactReferenceCache::path_for(const Image& color, const Im
                                   exact_scatter_key(color, radius_px, depth_m, mode));
 }
 
+namespace {
+
+std::string pixels_hash(const Image& image) {
+  std::uint64_t hash = 14695981039346656037ull;
+  fnv1a_image(hash, image);
+  return fmt::format("{:016x}", hash);
+}
+
+// Why a stored entry cannot be used for `key`, or empty when it can (`cached` then holds it).
+std::string check_entry(const std::filesystem::path& path, const std::string& key, const Image& color, Image& cached) {
+  try {
+    const std::string stored_key = read_image_attribute(path.string(), kKeyAttribute);
+    if (stored_key.empty()) return "carries no key (written by an older bokehbench, or not by bokehbench)";
+    if (stored_key != key) return fmt::format("was computed for other inputs (key {}, expected {})", stored_key, key);
+    cached = read_image(path.string(), 3, "cached reference");
+    if (cached.width != color.width || cached.height != color.height)
+      return fmt::format("is {}x{}, expected {}x{}", cached.width, cached.height, color.width, color.height);
+    if (pixels_hash(cached) != read_image_attribute(path.string(), kPixelsAttribute))
+      return "has pixels that do not match the hash stored with them";
+  } catch (const std::runtime_error& e) {
+    return fmt::format("cannot be read ({})", e.what());  // e.g. truncated by a crash
+  }
+  return {};
+}
+
+}  // namespace
+
 Image ExactReferenceCache::get(const Image& color, const Image& radius_px, const Image& depth_m,
                                ScatterComposite mode, int threads) {
   validate_inputs(color, radius_px, depth_m, mode);
   const std::filesystem::path path = path_for(color, radius_px, depth_m, mode);
-  if (std::filesystem::exists(path)) {
-    try {
-      Image cached = read_image(path.string(), 3);
-      if (cached.width == color.width && cached.height == color.height) return cached;
-    } catch (const std::runtime_error&) {
-      // Unreadable (e.g. truncated by a crash): recompute and overwrite below.
-    }
+  const std::string key = fmt::format("{:016x}", exact_scatter_key(color, radius_px, depth_m, mode));
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) {
+    Image cached;
+    const std::string problem = check_entry(path, key, color, cached);
+    if (problem.empty()) return cached;
+    fmt::print(stderr, "note: reference cache entry '{}' {}: recomputing it\n", path.string(), problem);
   }
   Image reference = exact_scatter(color, radius_px, depth_m, mode, threads);
   std::filesystem::create_directories(directory_);
-  // Unique temporary name, still ending in .exr so write_image picks the format.
-  const std::filesystem::path partial =
-      path.parent_path() / fmt::format("{}.partial-{:08x}.exr", path.stem().string(), std::random_device{}());
-  write_image(reference, partial.string());
-  std::filesystem::rename(partial, path);
+  // Atomic (write_file_atomically): concurrent processes never read half a file.
+  write_image(reference, path.string(), {{kKeyAttribute, key}, {kPixelsAttribute, pixels_hash(reference)}});
   return reference;
 }
 

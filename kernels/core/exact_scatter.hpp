@@ -61,19 +61,23 @@ Image exact_scatter(const Image& color, const Image& radius_px, const Image& dep
 std::vector<double> exact_scatter_double(const Image& color, const Image& radius_px, const Image& depth_m,
                                          ScatterComposite mode, int threads = default_cpu_threads());
 
-// FNV-1a (64 bit) over the algorithm version, mode, shapes and the bytes of colour and radius, and of
-// depth for depth_ordered: the same inputs always name the same cached reference.
+// FNV-1a (64 bit) over the algorithm version, the cache format, mode, shapes (the frame size) and the bytes
+// of colour and radius, and of depth for depth_ordered: the same inputs always name the same cached
+// reference. The radius is computed from the depth, the lens and the CoC clamp, so the key covers them.
 std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, const Image& depth_m,
                                 ScatterComposite mode);
 
 // EXR files (float, lossless) under `directory`, one per key, so sweeps compute each reference once.
-// Files are written under a temporary name and renamed, so concurrent processes never read half a file.
+// Files are written atomically (write_file_atomically), so concurrent processes never read half a file.
+// Each entry carries in its header the key it was computed for and a hash of its pixels; an entry is used
+// only when both match (the key is recomputed from the inputs): one replaced by another valid image, left
+// from an older format, or corrupted is recomputed, with a one-line note on stderr naming it.
 class ExactReferenceCache {
  public:
   explicit ExactReferenceCache(std::filesystem::path directory = "build/reference-cache");
 
-  // The cached reference for these inputs, computed with exact_scatter and stored on a miss (or when
-  // the stored file is unreadable or of the wrong size).
+  // The cached reference for these inputs, computed with exact_scatter and stored on a miss, or when the
+  // stored entry is unreadable or does not verify (its key, size or pixel hash).
   Image get(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
             int threads = default_cpu_threads());
 

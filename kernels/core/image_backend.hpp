@@ -20,15 +20,23 @@ ImageFileInfo read_info(const std::string& path);
 // Throws std::runtime_error naming `what`, the file and the problem.
 Image read(const std::string& path, const std::string& what);
 
+// Writers: `file` is the file to write (write_file_atomically's temporary, whose name ends in ".tmp.PID");
+// the format is given, not taken from its name. They throw std::runtime_error with the reason only:
+// write_file_atomically names the target.
+//
 // 32-bit float OpenEXR, ZIP compressed, channels named as OpenImageIO names them (1: Y; 2: R G;
-// 3: R G B; 4: R G B A; more: R G B A channel4 ...).
-void write_exr_float(const Image& image, const std::string& path);
+// 3: R G B; 4: R G B A; more: R G B A channel4 ...), and `attributes` as string attributes of the header.
+void write_exr_float(const Image& image, const std::string& file, const ExrAttributes& attributes);
 
 // 8 bits a channel, row-major and interleaved (`bytes.size() == width * height * channels`), in the format
-// the extension names (the lean back-end: PNG only). srgb_tagged: mark the file as sRGB-encoded (PNG's
-// sRGB, gAMA and cHRM chunks).
-void write_8bit(const std::vector<std::uint8_t>& bytes, int width, int height, int channels, const std::string& path,
-                bool srgb_tagged);
+// `extension` names (".png", ...; the lean back-end: PNG only). srgb_tagged: mark the file as sRGB-encoded
+// (PNG's sRGB, gAMA and cHRM chunks).
+void write_8bit(const std::vector<std::uint8_t>& bytes, int width, int height, int channels, const std::string& file,
+                const std::string& extension, bool srgb_tagged);
+
+// The string attribute `name` of an EXR file's header; empty when it has none. Throws std::runtime_error
+// naming the file when it cannot be read.
+std::string read_exr_string_attribute(const std::string& path, const std::string& name);
 
 // See draw_text in image_io.hpp.
 bool draw_text(Image& rgb, int x_px, int baseline_y_px, const std::string& text, int size_px,

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "atomic_file.hpp"
 #include "image_backend.hpp"
 
 namespace bokeh {
@@ -104,26 +105,47 @@ unsigned char quantize_unit_to_8bit(float value) {
   return static_cast<unsigned char>(unit * 255.0f + 0.5f);
 }
 
-void write_image(const Image& image, const std::string& path) {
+void write_image(const Image& image, const std::string& path, const ExrAttributes& exr_attributes) {
   check_image_extension(path);
   check_writable_shape(image, path);
-  if (image_backend::lower_extension(path) == ".exr") {
-    image_backend::write_exr_float(image, path);
+  const std::string ext = image_backend::lower_extension(path);
+  if (ext == ".exr") {
+    write_file_atomically(
+        path, [&](const std::string& file) { image_backend::write_exr_float(image, file, exr_attributes); }, "image");
     return;
   }
+  if (!exr_attributes.empty())
+    throw std::invalid_argument(fmt::format("cannot write image '{}': header attributes need .exr", path));
   // Colour channels are encoded; a fourth (alpha) is stored as is, as OpenImageIO's colour conversion did.
   const std::vector<std::uint8_t> bytes = to_8bit(tone_map_for_display(image), std::min(3, image.channels));
-  image_backend::write_8bit(bytes, image.width, image.height, image.channels, path, /*srgb_tagged=*/true);
+  write_file_atomically(
+      path,
+      [&](const std::string& file) {
+        image_backend::write_8bit(bytes, image.width, image.height, image.channels, file, ext, /*srgb_tagged=*/true);
+      },
+      "image");
 }
 
 void write_display_image(const Image& display_srgb, const std::string& path) {
   check_writable_shape(display_srgb, path);
-  if (image_backend::lower_extension(path) == ".exr") {
-    image_backend::write_exr_float(display_srgb, path);
+  const std::string ext = image_backend::lower_extension(path);
+  if (ext == ".exr") {
+    write_file_atomically(
+        path, [&](const std::string& file) { image_backend::write_exr_float(display_srgb, file, {}); }, "image");
     return;
   }
-  image_backend::write_8bit(to_8bit(display_srgb, 0), display_srgb.width, display_srgb.height, display_srgb.channels,
-                            path, /*srgb_tagged=*/false);
+  const std::vector<std::uint8_t> bytes = to_8bit(display_srgb, 0);
+  write_file_atomically(
+      path,
+      [&](const std::string& file) {
+        image_backend::write_8bit(bytes, display_srgb.width, display_srgb.height, display_srgb.channels, file, ext,
+                                  /*srgb_tagged=*/false);
+      },
+      "image");
+}
+
+std::string read_image_attribute(const std::string& path, const std::string& name) {
+  return image_backend::read_exr_string_attribute(path, name);
 }
 
 bool draw_text(Image& rgb, int x_px, int baseline_y_px, const std::string& text, int size_px,

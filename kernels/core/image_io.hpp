@@ -5,6 +5,8 @@
 // PNG files to the same values; the lean one reads no other formats and draws no text (draw_text).
 #include <array>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "image.hpp"
 
@@ -30,14 +32,22 @@ Image read_image(const std::string& path, int channels, const std::string& what 
 // Throws std::invalid_argument naming the path unless its extension (any case) is one of them.
 void check_image_extension(const std::string& path);
 
-// .exr: linear floats unchanged (32-bit float, ZIP). .png: Reinhard tone map on luminance, then sRGB
-// (encode_srgb), 8 bit (quantize_unit_to_8bit), tagged sRGB. Other extensions are refused
-// (check_image_extension).
-void write_image(const Image& image, const std::string& path);
+// String attributes of an EXR header (name, value), e.g. what a cached reference was computed from.
+using ExrAttributes = std::vector<std::pair<std::string, std::string>>;
+
+// .exr: linear floats unchanged (32-bit float, ZIP), with `exr_attributes` in its header. .png: Reinhard
+// tone map on luminance, then sRGB (encode_srgb), 8 bit (quantize_unit_to_8bit), tagged sRGB (attributes
+// refused). Other extensions are refused (check_image_extension). Written atomically (write_file_atomically,
+// atomic_file.hpp): a failed write leaves the old file and no temporary, and throws naming `path`.
+void write_image(const Image& image, const std::string& path, const ExrAttributes& exr_attributes = {});
+
+// The string attribute `name` in an EXR file's header (written by write_image); empty when absent or
+// when the file is not EXR. Throws naming the file when it cannot be read.
+std::string read_image_attribute(const std::string& path, const std::string& name);
 
 // Writes a display-encoded image ([0,1], e.g. to_display_srgb) as is, without write_image's tone map:
 // 8 bit (quantize_unit_to_8bit) for PNG, or any 8-bit format OpenImageIO knows by the extension (the
-// lean back-end: PNG only); 32-bit float for .exr.
+// lean back-end: PNG only); 32-bit float for .exr. Written atomically, as write_image.
 void write_display_image(const Image& display_srgb, const std::string& path);
 
 // The display transform write_image uses for PNG (linear HDR -> display-referred [0,1], still linear).

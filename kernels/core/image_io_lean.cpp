@@ -28,6 +28,7 @@
 #include <ImfMultiPartInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfPartType.h>
+#include <ImfStringAttribute.h>
 #include <OpenEXRConfig.h>
 #include <fmt/format.h>
 #include <png.h>
@@ -371,9 +372,8 @@ bool png_write_file(std::FILE* file, const std::vector<png_bytep>& rows, png_uin
   return true;
 }
 
-[[noreturn]] void fail_write(const std::string& path, const std::string& why) {
-  throw std::runtime_error(fmt::format("cannot write image '{}': {}", path, why));
-}
+// write_file_atomically names the target: the reason alone.
+[[noreturn]] void fail_write(const std::string& why) { throw std::runtime_error(why); }
 
 }  // namespace
 
@@ -393,7 +393,20 @@ Image read(const std::string& path, const std::string& what) {
   return detect_format(path, what) == Format::exr ? read_exr(path, what) : read_png(path, what);
 }
 
-void write_exr_float(const Image& image, const std::string& path) {
+std::string read_exr_string_attribute(const std::string& path, const std::string& name) {
+  if (detect_format(path, "image") != Format::exr) return {};
+  try {
+    Imf::MultiPartInputFile file(path.c_str());
+    const auto* attribute = file.header(0).findTypedAttribute<Imf::StringAttribute>(name);
+    return attribute ? attribute->value() : std::string();
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail_read("image", path, fmt::format("OpenEXR: {}", e.what()));
+  }
+}
+
+void write_exr_float(const Image& image, const std::string& file, const ExrAttributes& attributes) {
   static const char* const kRgba[] = {"R", "G", "B", "A"};
   try {
     Imf::Header header(image.width, image.height);
@@ -402,43 +415,44 @@ void write_exr_float(const Image& image, const std::string& path) {
     for (int k = 0; k < image.channels; ++k)
       names.push_back(image.channels == 1 ? "Y" : k < 4 ? kRgba[k] : fmt::format("channel{}", k));
     for (const std::string& name : names) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    for (const auto& [name, value] : attributes) header.insert(name, Imf::StringAttribute(value));
     const std::size_t pixel_stride_b = sizeof(float) * image.channels;
     Imf::FrameBuffer frame;
     for (int k = 0; k < image.channels; ++k)
       frame.insert(names[k],
                    Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(image.pixels.data() + k)),
                               pixel_stride_b, pixel_stride_b * image.width));
-    Imf::OutputFile file(path.c_str(), header);
-    file.setFrameBuffer(frame);
-    file.writePixels(image.height);
+    Imf::OutputFile out(file.c_str(), header);
+    out.setFrameBuffer(frame);
+    out.writePixels(image.height);
   } catch (const std::bad_alloc&) {
     throw;
   } catch (const std::exception& e) {
-    fail_write(path, fmt::format("OpenEXR: {}", e.what()));
+    fail_write(fmt::format("OpenEXR: {}", e.what()));
   }
 }
 
-void write_8bit(const std::vector<std::uint8_t>& bytes, int width, int height, int channels, const std::string& path,
-                bool srgb_tagged) {
-  const std::string ext = lower_extension(path);
+void write_8bit(const std::vector<std::uint8_t>& bytes, int width, int height, int channels, const std::string& file,
+                const std::string& extension, bool srgb_tagged) {
+  const std::string& ext = extension;
   if (ext != ".png")
-    fail_write(path, fmt::format("this build writes 8-bit images only as .png, not '{}' (BOKEH_IMAGE_IO=lean; "
+    fail_write(fmt::format("this build writes 8-bit images only as .png, not '{}' (BOKEH_IMAGE_IO=lean; "
                                  "configure with -DBOKEH_IMAGE_IO=oiio for other formats)",
                                  ext.empty() ? "(none)" : ext));
   if (channels == 2 || channels == 4)
-    fail_write(path, fmt::format("{} channels would make the last one PNG alpha, which this build does not write "
+    fail_write(fmt::format("{} channels would make the last one PNG alpha, which this build does not write "
                                  "(BOKEH_IMAGE_IO=lean): write 1 or 3 channels, or .exr",
                                  channels));
   std::vector<png_bytep> rows(height);
   for (int y = 0; y < height; ++y)
     rows[y] = const_cast<png_bytep>(bytes.data()) + static_cast<std::size_t>(y) * width * channels;
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"), std::fclose);
-  if (!file) fail_write(path, std::strerror(errno));
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> out(std::fopen(file.c_str(), "wb"), std::fclose);
+  if (!out) fail_write(std::strerror(errno));
   PngError error;
-  if (!png_write_file(file.get(), rows, width, height, channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
+  if (!png_write_file(out.get(), rows, width, height, channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
                       srgb_tagged, &error))
-    fail_write(path, fmt::format("PNG: {}", error.message));
-  if (std::fclose(file.release()) != 0) fail_write(path, std::strerror(errno));
+    fail_write(fmt::format("PNG: {}", error.message));
+  if (std::fclose(out.release()) != 0) fail_write(std::strerror(errno));
 }
 
 bool draw_text(Image&, int, int, const std::string&, int, const std::array<float, 3>&) {

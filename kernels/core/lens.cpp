@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "text_file.hpp"
+
 namespace bokeh {
 
 void validate(const Lens& lens) {
@@ -27,11 +29,10 @@ std::string to_string(CocModel model) {
 }
 
 Lens load_lens_json(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("cannot open lens file '{}'", path));
+  const std::string text = read_text_file(path, "lens file");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(fmt::format("lens file '{}' is not valid JSON: {}", path, e.what()));
   }

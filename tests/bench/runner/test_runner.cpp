@@ -9,6 +9,7 @@
 
 #include "runner.hpp"
 #include "sweep.hpp"
+#include "targets.hpp"
 
 namespace bokeh {
 namespace {
@@ -465,6 +466,27 @@ TEST(Axes, MaxCocFollowsThePatternUnlessFixed) {
   EXPECT_EQ(points[2].max_coc_px, 12);
   axes.max_coc_px = {0};
   EXPECT_THROW(expand(axes), std::invalid_argument);
+}
+
+// A frame that cannot fit the budget even at the ceiling rate is named before anything runs, with the
+// estimate's parts (issue 22, finding 10); the floor is a lower bound, so a point under it always runs.
+TEST(FrameBudget, AFrameEstimatedAboveTheBudgetIsSkippedWithTheEstimate) {
+  // naive at 16384 x 16384, N = 201: ~1.1e13 taps.
+  const FrameTimeFloor cpu = frame_time_floor(1.1e13, /*on_cpu=*/true, 2);
+  EXPECT_DOUBLE_EQ(cpu.taps_per_s, 2e10);
+  EXPECT_DOUBLE_EQ(cpu.seconds, 550.0);
+  EXPECT_EQ(over_frame_budget(cpu, 300),
+            "estimated at least 9.2 min for one frame (1.1e13 taps at <= 2e10 taps/s: 1e10 taps/s a CPU thread x 2 "
+            "threads), over the budget of 300 s (--run-over-budget runs it anyway)");
+  EXPECT_EQ(over_frame_budget(cpu, 600), "");
+  EXPECT_EQ(over_frame_budget(cpu, 0), "");  // no budget: no check
+  EXPECT_NE(over_frame_budget(frame_time_floor(1e17, true, 1), 300).find("estimated at least 115.7 days"),
+            std::string::npos);
+  const FrameTimeFloor gpu = frame_time_floor(1.1e13, /*on_cpu=*/false, 2);
+  EXPECT_DOUBLE_EQ(gpu.seconds, 1.1);
+  EXPECT_EQ(over_frame_budget(gpu, 1), "estimated at least 1 s for one frame (1.1e13 taps at <= 1e13 taps/s: 1e13 "
+                                       "taps/s, above any GPU's gather), over the budget of 1 s (--run-over-budget "
+                                       "runs it anyway)");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "coc.hpp"
 #include "exact_scatter.hpp"
+#include "image_io.hpp"
 #include "scene.hpp"
 #include "test_support.hpp"
 
@@ -286,6 +287,46 @@ TEST(ExactReferenceCache, StoresOnceAndReadsBackTheSameImage) {
             cache.path_for(color, radius, Image(), ScatterComposite::energy_sum));
   radius.pixels[17] = std::nextafter(radius.pixels[17], 100.0f);
   EXPECT_NE(cache.path_for(color, radius, depth, ScatterComposite::depth_ordered), path);
+  std::filesystem::remove_all(dir);
+}
+
+// An entry replaced by another valid entry (or one whose pixels were edited) is recomputed with a note,
+// never used: the reference returned is the cold run's.
+TEST(ExactReferenceCache, AnEntryThatIsNotItsKeysIsRecomputedWithANote) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("bokeh-reference-cache-swap-" + std::to_string(std::random_device{}()));
+  ExactReferenceCache cache(dir);
+  const Image color_a = random_image(16, 12, 3, 0.0f, 30.0f, 21), color_b = random_image(16, 12, 3, 0.0f, 30.0f, 22);
+  const Image radius = random_image(16, 12, 1, 0.0f, 3.0f, 23), depth = random_image(16, 12, 1, 1.0f, 9.0f, 24);
+  const auto mode = ScatterComposite::energy_sum;
+  const Image cold_a = exact_scatter(color_a, radius, depth, mode, 2);
+  cache.get(color_a, radius, depth, mode, 2);
+  cache.get(color_b, radius, depth, mode, 2);
+  const auto path_a = cache.path_for(color_a, radius, depth, mode), path_b = cache.path_for(color_b, radius, depth, mode);
+  std::filesystem::copy_file(path_b, path_a, std::filesystem::copy_options::overwrite_existing);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cache.get(color_a, radius, depth, mode, 2).pixels, cold_a.pixels);
+  const std::string note = testing::internal::GetCapturedStderr();
+  EXPECT_NE(note.find("note: reference cache entry '" + path_a.string() + "' was computed for other inputs"),
+            std::string::npos) << note;
+  EXPECT_EQ(std::count(note.begin(), note.end(), '\n'), 1) << note;
+  // Rewritten: the next read uses it silently.
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cache.get(color_a, radius, depth, mode, 2).pixels, cold_a.pixels);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  // The right key over other pixels (an edited entry): the pixel hash catches it.
+  Image edited = cold_a;
+  edited.pixels[7] += 1.0f;
+  const std::string stem = path_a.stem().string(), key = stem.substr(stem.rfind('-') + 1);
+  write_image(edited, path_a.string(), {{"bokehReferenceKey", key}});
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cache.get(color_a, radius, depth, mode, 2).pixels, cold_a.pixels);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("do not match the hash"), std::string::npos);
+  // An image with no key (another tool's, or an older bokehbench's) is not trusted either.
+  write_image(cold_a, path_a.string());
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(cache.get(color_a, radius, depth, mode, 2).pixels, cold_a.pixels);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("carries no key"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 
