@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -30,11 +31,12 @@ struct Figure9Options {
   MethodOptionFlags method_options;
   double target_ratio_pct = 5;   // each naive/FLAG ratio's 95% interval within +-this % of it
   double target_exponent = 0.05;  // each growth exponent's 95% interval within +-this
+  std::vector<std::string> sweep_choices;  // method options measured at every one of their choices
 };
 
 // One measured point's samples by round: what every figure below is drawn from.
 struct RoundPoint {
-  std::string method, backend;
+  std::string method, variant, backend;  // variant: options off their defaults (sweep.cpp), "" for none
   int n = 0;
   RoundValues wall_ms, cpu_ms;                   // the frame's wall-clock time; the process CPU time per frame
   std::map<std::string, RoundValues> pass_ms;   // GPU: per pass (Vulkan timestamps)
@@ -43,7 +45,8 @@ struct RoundPoint {
 std::vector<RoundPoint> round_points(const nlohmann::json& points) {
   std::vector<RoundPoint> out;
   for (const auto& p : points) {
-    RoundPoint r{p["method"], p["backend"], p["N"].get<int>(), round_values(p), round_values(p, "samples_cpu_ms"), {}};
+    RoundPoint r{p["method"], p.value("variant", ""), p["backend"], p["N"].get<int>(), round_values(p),
+                 round_values(p, "samples_cpu_ms"), {}};
     for (const auto& [pass, values] : p["samples_pass_ms"].items())
       for (std::size_t s = 0; s < values.size(); ++s) r.pass_ms[pass][p["sample_rounds"][s].get<int>()] = values[s].get<double>();
     out.push_back(std::move(r));
@@ -56,7 +59,8 @@ std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, cons
   for (std::size_t i = 0; i < points.size(); ++i) {
     const runner::PointRecord& rec = record.points[i];
     if (rec.samples.empty() || !rec.skipped.empty()) continue;
-    RoundPoint r{points[i].method->name, points[i].backend, points[i].options.pattern.size_n, {}, {}, {}};
+    RoundPoint r{points[i].method->name, points[i].variant, points[i].backend, points[i].options.pattern.size_n,
+                 {}, {}, {}};
     for (std::size_t s = 0; s < rec.samples.size(); ++s) {
       r.wall_ms[rec.sample_round[s]] = rec.samples[s].frame_ms;
       r.cpu_ms[rec.sample_round[s]] = rec.samples[s].cpu_ms;
@@ -98,12 +102,16 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
       return fit_power_law(x, y).exponent;
     });
   };
+  std::set<std::string> variants;
+  for (const auto& p : points) variants.insert(p.variant);
   for (const Method& m : registered_methods())
+    for (const std::string& variant : variants)
     for (const char* backend : {"gpu", "cpu"}) {
       std::vector<const RoundPoint*> pts;
       for (const auto& p : points)
-        if (p.method == m.name && p.backend == backend) pts.push_back(&p);
+        if (p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
       if (pts.empty()) continue;
+      const std::string name = m.name + variant;
       std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
       std::vector<double> n, medians, low, high, iqr;
       std::vector<const RoundValues*> curve;
@@ -130,7 +138,7 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
         fits[name] = {{"exponent", fit.exponent}, {"low", b.low}, {"high", b.high}, {"coefficient_ms", fit.coefficient},
                       {"r_squared", fit.r_squared}, {"points", fit.points}, {"N", std::vector<double>(n.begin() + at, n.end())}};
         if (name == std::string("larger_half") && !(b.half_width() <= target_exponent))
-          out.unsettled.push_back(fmt::format("{} {} exponent {:.2f} +-{:.2f}", m.name, backend, b.estimate, b.half_width()));
+          out.unsettled.push_back(fmt::format("{} {} exponent {:.2f} +-{:.2f}", name, backend, b.estimate, b.half_width()));
       }
       nlohmann::json pass_fits = nlohmann::json::object();
       if (metric == Metric::wall && !headlines_only && n.size() - half >= 2)
@@ -141,15 +149,16 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
           if (pass_curve.size() == pts.size()) pass_fits[pass] = interval_json(exponent(pass_curve, n, half));
         }
       std::sort(iqr.begin(), iqr.end());
-      out.series.push_back({{"method", m.name}, {"backend", backend}, {"N", n}, {"median_ms", medians},
+      out.series.push_back({{"method", m.name}, {"variant", variant}, {"backend", backend}, {"N", n}, {"median_ms", medians},
                             {"median_ms_low", low}, {"median_ms_high", high},
                             {"median_relative_iqr", iqr[iqr.size() / 2]}, {"fits", fits},
                             {"pass_fits_larger_half", pass_fits}});
     }
+  // The paper's comparison: both at their defaults.
   for (const auto& a : points) {
-    if (a.method != "naive") continue;
+    if (a.method != "naive" || !a.variant.empty()) continue;
     for (const auto& b : points) {
-      if (b.method != "flag" || b.backend != a.backend || b.n != a.n) continue;
+      if (b.method != "flag" || !b.variant.empty() || b.backend != a.backend || b.n != a.n) continue;
       const Interval r = bootstrap.interval([&](const std::vector<int>& d) { return paired_ratio(values(a), values(b), d); });
       const bool settled = r.relative_half_width() <= target_ratio;
       out.naive_over_flag.push_back(
@@ -201,7 +210,8 @@ void print_summary(const nlohmann::json& doc) {
       return fmt::format("{:.2f} [{:.2f}, {:.2f}]", f[which]["exponent"].get<double>(), f[which]["low"].get<double>(),
                          f[which]["high"].get<double>());
     };
-    fmt::print("{:<10} {:<4} {:>22} {:>22}\n", series["method"].get<std::string>(), series["backend"].get<std::string>(),
+    fmt::print("{:<10} {:<4} {:>22} {:>22}\n", series["method"].get<std::string>() + series["variant"].get<std::string>(),
+               series["backend"].get<std::string>(),
                exponent("larger_half"), exponent("all_sizes"));
     for (const auto& [pass, b] : series["pass_fits_larger_half"].items())
       fmt::print("{:>15} pass {:<12} {:>22}\n", "", pass, with_interval(b, "{:.2f}"));
@@ -242,6 +252,7 @@ void figure9(Figure9Options& o) {
   axes.patterns = o.axes.patterns();
   axes.precisions = o.axes.precisions;
   axes.option_values = o.method_options.values_for(axes.methods);
+  axes.sweep_choices = o.sweep_choices;
   std::vector<int> sizes;
   for (const auto& p : axes.patterns) sizes.push_back(p.size_n);
   const double target_ratio = o.target_ratio_pct / 100, target_exponent = o.target_exponent;
@@ -298,6 +309,9 @@ void add_figure9_command(CLI::App& app) {
                   "Measure until each growth exponent's 95% interval (larger half of N) is within +-this")
       ->check(finite_number())
       ->capture_default_str();
+  cmd->add_option("--sweep-choices", o->sweep_choices,
+                  "Method options (e.g. horizontal_bins) measured at every one of their choices, interleaved with the "
+                  "rest: each variant is a curve of its own; naive / FLAG pairs the defaults");
   a.add_quick(cmd, "Small sweep for CI and tests (200x150, N = 5, 9, 13, 20 s)",
               {{Axis::sizes, {"5", "9", "13"}}, {Axis::resolutions, {"200x150"}}}, 20);
   cmd->callback([o] { figure9(*o); });

@@ -100,17 +100,23 @@ std::vector<std::map<std::string, double>> option_sets(const Method& m, const Ax
   return sets;
 }
 
+// The method's options that differ from their defaults, as "/key:value" each ("" when none).
+std::string variant_of(const SweepPoint& p) {
+  std::string variant;
+  for (const auto& spec : p.method->options) {
+    const double v = p.options.number(spec.key);
+    if (v != spec.default_value) variant += fmt::format("/{}:{}", spec.key, spec.to_json(v).dump());
+  }
+  return variant;
+}
+
 std::string point_id(const SweepPoint& p) {
   const FilterOptions& o = p.options;
   std::string id = fmt::format("{}/{}/{}/{}/N:{}/k:{}/{}", p.method->name, p.backend, p.scene, p.resolution.text(),
                                o.pattern.size_n, o.pattern.spacing_px, o.precision);
   if (o.buffer_scale != 1) id += fmt::format("/scale:1-{}", o.buffer_scale);
   if (p.max_coc_px != o.pattern.max_radius_px()) id += fmt::format("/coc:{}", p.max_coc_px);
-  for (const auto& spec : p.method->options) {
-    const double v = o.number(spec.key);
-    if (v != spec.default_value) id += fmt::format("/{}:{}", spec.key, spec.to_json(v).dump());
-  }
-  return id;
+  return id + p.variant;
 }
 
 }  // namespace
@@ -151,6 +157,7 @@ std::vector<SweepPoint> expand(const Axes& axes) {
                     p.options.buffer_scale = scale;
                     p.options.values = values;
                     p.max_coc_px = coc.value_or(pattern.max_radius_px());
+                    p.variant = variant_of(p);
                     p.id = point_id(p);
                     points.push_back(std::move(p));
                   }
@@ -201,6 +208,7 @@ nlohmann::json identity_json(const SweepPoint& p) {
           {"precision", o.precision},
           {"buffer_scale", o.buffer_scale},
           {"options", p.method->options_json(o)},
+          {"variant", p.variant},
           {"max_coc_px", p.max_coc_px}};
 }
 

@@ -54,6 +54,7 @@ struct Axes {
 
 struct SweepPoint {
   std::string id;  // stable across runs: what results and Google Benchmark names carry
+  std::string variant;  // the method's options off their defaults, "/key:value" each (the id ends with it)
   const Method* method = nullptr;
   std::string backend;
   std::string scene;
