@@ -70,6 +70,20 @@ void check_layer_input(const Image& packed, LayerPrecision precision);
 
 FlagLayers flag_horizontal(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                            int threads = default_cpu_threads());
+// Output columns per row segment of the GPU horizontal pass's scan binning (horizontal_bins = scan,
+// shaders/flag/horizontal_scan.comp): each segment also reads the n samples either side of it, so
+// larger segments waste fewer loads: at N = 41 and 81 (800x600, k = 2) 256 columns took 0.81 and 0.75
+// of 64 columns' time. The difference array is SEGMENT vec3 per invocation whatever N, within what
+// lavapipe computes correctly (kSoftwareMaxBlockLayers in flag_gpu.cpp: wrong results past ~324).
+constexpr int kFlagScanSegment = 256;
+// flag_horizontal's layers summed in the GPU scan binning's order, bit for bit (f32; the other
+// per-value precisions round the same f32 values): per row, lattice phase, segment of `segment`
+// columns at stride k and layer z, each sample whose disc reaches z adds itself at the start of its
+// interval of columns (clamped to the segment) and subtracts itself past its end, in a difference
+// array, in row order; a prefix sum along the segment gives the layer. The same samples per layer as
+// flag_horizontal, in another order. Throws std::invalid_argument for bracketed precisions.
+FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
+                                int segment = kFlagScanSegment, int threads = default_cpu_threads());
 Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads());
 // The whole FLAG blur. For the per-value precisions (f32, f16, r11g11b10f) it runs strip by strip in a
 // buffer reused across calls, vectorised, bit for bit flag_blur_reference's result (tested); the

@@ -4,7 +4,8 @@
 //
 // The horizontal pass computes horizontal_block pixels per invocation at stride k (flag_gpu.hpp):
 // each loaded row sample serves them all, with the same layers bit for bit; horizontal_bins picks how
-// a sample lands in its layer's bin (indexed or masked, flag_gpu.hpp), again with the same layers.
+// a sample lands in its layer's bin (indexed or masked, flag_gpu.hpp), again with the same layers, or
+// sums each layer by a prefix scan along row segments (scan: horizontal_scan.comp, its own order).
 //
 // Layer precisions (LayerPrecision, kernels/flag/flag.hpp): one image format and one shader pair each.
 // The bracketed ones add a "bracket" pass before the horizontal pass: the horizontal computation
@@ -82,7 +83,7 @@ int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& de
 }
 
 const std::vector<std::string>& flag_horizontal_bins() {
-  static const std::vector<std::string> bins = {"auto", "indexed", "masked"};
+  static const std::vector<std::string> bins = {"auto", "indexed", "masked", "scan"};
   return bins;
 }
 
@@ -91,15 +92,20 @@ const std::vector<std::string>& flag_horizontal_bins() {
 // (masked vs indexed) at N = 41 and 115 vs 124 ms at N = 63 (32 layers), then 898 vs 120 ms at N = 65
 // (33 layers): past 32 iterations (Mesa's usual max_unroll_iterations) the loop stays a loop and
 // every bin access becomes the per-lane array access masking was meant to avoid.
-constexpr int kSoftwareMaxMaskedLayers = 32;
+// Scan against the others on lavapipe, the same frames interleaved (800x600 hoops, k = 2, f16, the
+// horizontal pass's median over 7 rounds, on a loaded machine whose times spread up to 2x; ratios to
+// indexed): N = 21 masked 0.63, scan 0.78; N = 41 masked 0.77, scan 0.71; N = 81 masked 8.9, scan
+// 0.84; N = 121 scan 0.71. Masked up to 21 layers (N = 41), scan beyond; never more than ~1.4x:
+// lavapipe turns each event into a per-lane scalar read and write of the difference array, as it
+// does each indexed bin, and a pixel takes about as many events (2 per layer) as samples (N).
+constexpr int kSoftwareMaskedFirstLayers = 21;
 
-bool flag_masked_bins(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
-  switch (bins) {
-    case FlagHorizontalBins::indexed: return false;
-    case FlagHorizontalBins::masked: return true;
-    case FlagHorizontalBins::automatic: break;
-  }
-  return device.is_software() && layers <= kSoftwareMaxMaskedLayers;
+FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
+  if (bins != FlagHorizontalBins::automatic) return bins;
+  // A GPU's L1 cache serves the indexed bins (a register file or cache line per pixel) at one add
+  // per sample; the scan's re-reads of each sample per group of 8 layers would only add loads there.
+  if (!device.is_software()) return FlagHorizontalBins::indexed;
+  return layers <= kSoftwareMaskedFirstLayers ? FlagHorizontalBins::masked : FlagHorizontalBins::scan;
 }
 
 namespace {
@@ -144,7 +150,7 @@ class Flag final : public gpu::GpuFilter {
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
         outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), pattern_.layers())),
-        masked_bins_(flag_masked_bins(config.horizontal_bins, frame.ctx.info(), pattern_.layers())),
+        bins_(flag_horizontal_binning(config.horizontal_bins, frame.ctx.info(), pattern_.layers())),
         tile_px_(config.adaptive ? config.adaptive_tile_px : 0),
         layer_count_(pattern_.layers()) {
     check_colour(frame, config.precision);
@@ -195,11 +201,14 @@ class Flag final : public gpu::GpuFilter {
                            sizeof(PassParams), std::vector<std::int32_t>{pattern_.spacing_px, tile_px_});
       tile_layers_->bind(0, tiles_->buffer());
     }
-    check_software_bounds(frame.ctx.info(), outputs_, layer_count_, bracketed);
+    // The scan runs no block (its difference array is kFlagScanSegment vec3 whatever the layers).
+    check_software_bounds(frame.ctx.info(), bins_ == FlagHorizontalBins::scan ? 1 : outputs_, layer_count_, bracketed);
     const std::string variant = std::string(tile_px_ > 0 ? "_adaptive_" : "_") + to_string(config.precision);
-    // constant_id 4 is the tile size (adaptive; unused otherwise), 5 MASKED_BINS.
+    const bool scan = bins_ == FlagHorizontalBins::scan;
+    // constant_id 4 is the tile size (adaptive; unused otherwise), 5 MASKED_BINS, 6 the scan's SEGMENT.
     std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px,
-                                                      outputs_,     tile_px_,      masked_bins_ ? 1 : 0};
+                                                      outputs_,     tile_px_,      bins_ == FlagHorizontalBins::masked,
+                                                      kFlagScanSegment};
     std::vector<std::int32_t> vertical_constants = {layer_count_};
     std::vector<VkDescriptorType> horizontal_bindings = {kBuffer, kImage}, vertical_bindings = {kImage, kBuffer};
     if (bracketed) horizontal_bindings.push_back(kBuffer), vertical_bindings.push_back(kBuffer);
@@ -209,8 +218,10 @@ class Flag final : public gpu::GpuFilter {
       vertical_bindings.insert(vertical_bindings.end(), {kBuffer, kBuffer});  // the tile map, FLAG's input
     }
     layers_.emplace(frame.ctx, layer_format(config.precision), extent_x, extent_y, static_cast<std::uint32_t>(layer_count_));
-    horizontal_.emplace(frame.ctx, vk::spirv("flag/horizontal" + variant), horizontal_bindings, sizeof(PassParams),
-                        horizontal_constants);
+    // Scan: a workgroup is 8 layers of one row segment (lavapipe's 8 lanes, so its loads are uniform).
+    horizontal_.emplace(frame.ctx, vk::spirv(std::string(scan ? "flag/horizontal_scan" : "flag/horizontal") + variant),
+                        horizontal_bindings, sizeof(PassParams), horizontal_constants,
+                        scan ? vk::LocalSize{8, 1} : vk::LocalSize{});
     vertical_.emplace(frame.ctx, vk::spirv("flag/vertical" + variant), vertical_bindings, sizeof(PassParams),
                       vertical_constants);
     horizontal_->bind(0, *flag_input);
@@ -270,7 +281,13 @@ class Flag final : public gpu::GpuFilter {
       timer.end_pass(cmd, "bracket");
     }
     const std::uint32_t k = static_cast<std::uint32_t>(pattern_.spacing_px);
-    horizontal_->dispatch(cmd, &low, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, lh);
+    if (bins_ == FlagHorizontalBins::scan) {
+      // Per row: k phases x ceil(ceil(W / k) / SEGMENT) segments x ceil(layers / 8) workgroups of 8.
+      const std::uint32_t segments = ceil_div(ceil_div(lw, k), static_cast<std::uint32_t>(kFlagScanSegment));
+      horizontal_->dispatch(cmd, &low, segments * k * ceil_div(static_cast<std::uint32_t>(layer_count_), 8u) * 8u, lh);
+    } else {
+      horizontal_->dispatch(cmd, &low, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, lh);
+    }
     timer.end_pass(cmd, "horizontal");
     vertical_->dispatch(cmd, &low, lw, lh);
     timer.end_pass(cmd, "vertical");
@@ -316,7 +333,7 @@ class Flag final : public gpu::GpuFilter {
   GatherPattern pattern_;  // the (low-res) pattern the FLAG passes run
   std::uint32_t low_width_, low_height_;
   std::int32_t outputs_;   // pixels per invocation of the horizontal pass
-  bool masked_bins_;       // the horizontal pass's binning (MASKED_BINS in shaders/flag/layers.glsl)
+  FlagHorizontalBins bins_;  // the horizontal pass's binning as run (never automatic)
   std::int32_t tile_px_;   // adaptive: the tile map's tile size; 0: worst case
   std::int32_t layer_count_;  // allocated: the pattern's ceil(N/2), or (adaptive) what the scene needs
   int scene_max_index_ = -1;  // adaptive: the scene's largest disc index when prepared

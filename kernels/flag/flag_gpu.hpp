@@ -22,19 +22,23 @@ const std::vector<std::string>& flag_horizontal_blocks();  // "auto", "1", "2", 
 // The block the pass runs: `requested` (FlagConfig::horizontal_block), or auto's choice when empty.
 int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& device, int layers);
 
-// How the horizontal pass bins a row sample into the layer its disc reaches (MASKED_BINS in
-// shaders/flag/layers.glsl), the method's option "horizontal_bins"; both add the same samples in the
-// same order, so the layers are the same bit for bit. "indexed": bins[z] += sample, one add per sample
-// (the paper's O(N + n) per pixel). "masked": every bin tests its own integer range of the sample's
-// disc index and adds the sample or -0.0: O(N n) adds but no dynamically indexed array, which lavapipe
-// turns into a scalar load and store per lane. "auto": masked on CPU devices up to 32 layers (beyond,
-// lavapipe no longer unrolls the loop over the bins and masked is the slower; flag_gpu.cpp has the
-// measurements), indexed otherwise and on GPUs.
-const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked"
+// How the horizontal pass bins a row sample into the layer its disc reaches, the method's option
+// "horizontal_bins". "indexed" and "masked" (MASKED_BINS in shaders/flag/layers.glsl) add the same
+// samples in the same order, so their layers are the same bit for bit. "indexed": bins[z] += sample,
+// one add per sample (the paper's O(N + n) per pixel). "masked": every bin tests its own integer range
+// of the sample's disc index and adds the sample or -0.0: O(N n) adds but no dynamically indexed
+// array, which lavapipe turns into a scalar load and store per lane. "scan"
+// (shaders/flag/horizontal_scan.comp): per layer, interval sums from a difference array and a prefix
+// sum along a row segment of kFlagScanSegment columns: O(N) per pixel with each sample loaded once
+// per 8 layers; the same samples per layer in another order of additions (flag_horizontal_scan()
+// mirrors it bit for bit; bracketed precisions quantise its values with the bracket pass's ranges,
+// which sum in the bins' order: within one code). "auto": on CPU devices (lavapipe) masked up to 21
+// layers (N = 41), scan beyond; on GPUs indexed. flag_gpu.cpp has the measurements.
+const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked", "scan"
 // The option's value; the enumerators in the order of flag_horizontal_bins().
-enum class FlagHorizontalBins { automatic, indexed, masked };
-// Whether the pass runs masked bins: `bins` as chosen, auto's choice by device and layers.
-bool flag_masked_bins(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
+enum class FlagHorizontalBins { automatic, indexed, masked, scan };
+// The binning the pass runs: `bins` as chosen, auto's choice by device and layers.
+FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 
 // Parses `options` once (flag_config) and makes the filter.
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);

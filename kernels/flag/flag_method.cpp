@@ -39,6 +39,8 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   if (is_bracketed(c.precision))
     work.push_back({"bracket", lows * low.size_n, lows * 16,
                     static_cast<double>(flag_bracket_buffer_bytes(ceil_div(h, s), low.layers()))});
+  // Every binning reads each pixel's N row samples (scan: as interval ends, loaded once per 8 layers
+  // of a segment, the repeats from cache) and writes its layers once.
   work.push_back({"horizontal", lows * low.size_n, lows * 16, layer_bytes});
   work.push_back({"vertical", lows * low.size_n, layer_bytes, lows * 16});
   if (s > 1) work.push_back({"upsample", full * 4, full * 32 + lows * 16, full * 16});
@@ -144,8 +146,9 @@ void declare_flag(std::vector<Method>& methods) {
                 "flag: how the GPU horizontal pass bins each row sample into the layer its disc reaches. indexed: "
                 "bins[z] += sample (one add per sample, the paper's O(N + n)); masked: every bin tests the sample "
                 "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
-                "and store per lane); auto: masked on CPU devices such as lavapipe up to 32 layers (N = 63), indexed "
-                "beyond and on GPUs. The same image either way",
+                "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
+                "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU devices such as lavapipe masked up to 21 layers (N = 41), scan "
+                "beyond; indexed on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
                 0, 0, 0, false, flag_horizontal_bins()},
                adaptive_option("flag, off: a ceil(N/2)-layer 3D buffer and every pixel's gather over the whole "
                                "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "

@@ -63,11 +63,12 @@ std::vector<std::int32_t> with_local_size(std::vector<std::int32_t> values, std:
 
 ComputePipeline::ComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv,
                                  std::vector<VkDescriptorType> bindings, std::uint32_t push_constant_bytes,
-                                 std::vector<std::int32_t> specialization)
+                                 std::vector<std::int32_t> specialization, LocalSize local_size)
     : ctx_(ctx),
       push_constant_bytes_(push_constant_bytes),
+      local_size_(local_size),
       shared_(cached_pipeline(ctx, spirv, bindings, push_constant_bytes,
-                              with_local_size(std::move(specialization), local_size_x_, local_size_y_))),
+                              with_local_size(std::move(specialization), local_size.x, local_size.y))),
       set_(ctx, shared_->set_layout, bindings) {}
 
 void ComputePipeline::bind(std::uint32_t binding, const Buffer& buffer) { set_.bind(binding, buffer); }
@@ -99,7 +100,7 @@ void ComputePipeline::barrier_after(VkCommandBuffer cmd) const {
 }
 
 VkDispatchIndirectCommand ComputePipeline::groups(std::uint32_t invocations_x, std::uint32_t invocations_y) const {
-  return {(invocations_x + local_size_x_ - 1) / local_size_x_, (invocations_y + local_size_y_ - 1) / local_size_y_, 1};
+  return {(invocations_x + local_size_.x - 1) / local_size_.x, (invocations_y + local_size_.y - 1) / local_size_.y, 1};
 }
 
 void ComputePipeline::dispatch(VkCommandBuffer cmd, const void* push_constants, std::uint32_t invocations_x,

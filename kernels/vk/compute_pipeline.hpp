@@ -17,10 +17,17 @@
 
 namespace bokeh::vk {
 
+// The workgroup's size (local_size_x_id / local_size_y_id). 8 x 8 unless a shader needs its workgroup
+// to be one unit of work (FLAG's scan: a row segment per workgroup, so its loads are uniform).
+struct LocalSize {
+  std::uint32_t x = 8, y = 8;
+};
+
 class ComputePipeline {
  public:
   ComputePipeline(Context& ctx, std::span<const std::uint32_t> spirv, std::vector<VkDescriptorType> bindings,
-                  std::uint32_t push_constant_bytes, std::vector<std::int32_t> specialization = {});
+                  std::uint32_t push_constant_bytes, std::vector<std::int32_t> specialization = {},
+                  LocalSize local_size = {});
 
   void bind(std::uint32_t binding, const Buffer& buffer);  // a storage or uniform buffer, as declared
   void bind(std::uint32_t binding, const StorageImage3D& image);
@@ -43,7 +50,7 @@ class ComputePipeline {
 
   Context& ctx_;
   std::uint32_t push_constant_bytes_;
-  std::uint32_t local_size_x_ = 8, local_size_y_ = 8;
+  LocalSize local_size_;
   std::shared_ptr<PipelineObjects> shared_;
   DescriptorSet set_;
 };

@@ -1,5 +1,6 @@
 // Shared by flag_horizontal.comp and flag_bracket.comp (included after common.glsl): the f32 layer
-// values of FLAG's horizontal pass for one pixel, and the bracket buffer of the bracketed precisions.
+// values of FLAG's horizontal pass for one pixel, and the bracket buffer of the bracketed precisions;
+// horizontal_scan.comp takes its declarations and brackets.
 // Mirrors flag_horizontal() in kernels/flag/flag.cpp, in the same order of float additions.
 
 layout(constant_id = 0) const int LAYERS = 21;   // ceil(N/2): sizes the private arrays; n = LAYERS - 1

@@ -1,6 +1,7 @@
 # FLAG's 3D-buffer precisions, as kernels/flag/flag.cpp names them: name, GLSL image
 # format, bracketed. One horizontal and one vertical pass per precision, worst case and adaptive
-# (method option adaptive = on: bounded by the tile-max CoC map, shaders/common/tiles.glsl).
+# (method option adaptive = on: bounded by the tile-max CoC map, shaders/common/tiles.glsl), and the
+# scan binning's horizontal pass (horizontal_scan.comp).
 foreach(entry IN ITEMS f32:rgba32f:0 f16:rgba16f:0 r11g11b10f:r11f_g11f_b10f:0 unorm10_bracketed:rgb10_a2:1
                        unorm16_bracketed:rgba16:1)
   string(REPLACE ":" ";" fields ${entry})
@@ -16,6 +17,8 @@ foreach(entry IN ITEMS f32:rgba32f:0 f16:rgba16f:0 r11g11b10f:r11f_g11f_b10f:0 u
                  ADAPTIVE=${adaptive})
     bokeh_shader(flag vertical${suffix}_${precision} vertical.comp LAYER_FORMAT=${format} BRACKETED=${bracketed}
                  ADAPTIVE=${adaptive})
+    bokeh_shader(flag horizontal_scan${suffix}_${precision} horizontal_scan.comp LAYER_FORMAT=${format}
+                 BRACKETED=${bracketed} ADAPTIVE=${adaptive})
   endforeach()
 endforeach()
 bokeh_shader(flag bracket bracket.comp ADAPTIVE=0)

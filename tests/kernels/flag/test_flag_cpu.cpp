@@ -129,6 +129,51 @@ TEST(CpuReferences, StripFlagEqualsTheReferenceBitForBit) {
             << " threads " << threads;
 }
 
+// The scan binning's layers (flag_horizontal_scan, the GPU's order) against flag_horizontal's
+// ordered sums, f32. Both sum the same samples per (pixel, layer). A value of the scan passes through
+// at most E + T roundings (E <= 2 (T + 2 n) events added into the segment's difference array, T prefix
+// additions), each partial sum at most the sum of |events| <= 2 S, S = sum of |s| over the segment's
+// samples that reach the layer; the ordered one through at most N + n roundings of partial sums <= S.
+// So |scan - ordered| <= u (2 (E + T) + N + n) S, u = 2^-24. Segments of 1 column, a few, and the
+// GPU's (one per row and phase at these widths).
+TEST(CpuReferences, ScanLayersStayWithinTheirSummationBoundOfTheOrderedOnes) {
+  const double u = std::ldexp(1.0, -24);
+  double worst_ratio = 0;  // largest |scan - ordered| / (u S) seen
+  for (const PackedScene& s : packed_scenes())
+    for (int segment : {1, 5, 16, kFlagScanSegment}) {
+      const FlagLayers ordered = flag_horizontal(s.packed, s.pattern, LayerPrecision::f32, 2);
+      const FlagLayers scan = flag_horizontal_scan(s.packed, s.pattern, LayerPrecision::f32, segment, 2);
+      const int n = s.pattern.half(), k = s.pattern.spacing_px, w = s.packed.width;
+      const double roundings = 2.0 * (2 * (segment + 2 * n) + segment) + s.pattern.size_n + n;
+      for (int y = 0; y < s.packed.height; ++y)
+        for (int x = 0; x < w; ++x)
+          for (int z = 0; z <= n; ++z) {
+            const int x0 = x % k + (x / k) / segment * segment * k;  // the segment's first column
+            double sum[3] = {0, 0, 0};
+            for (int j = -n; j < segment + n; ++j) {
+              const int sx = x0 + j * k;
+              if (sx < 0 || sx >= w) continue;
+              const float* src = s.packed.px(sx, y);
+              if (disc_index(src[3] * src[3], k, 2 * n * n) < z * z) continue;
+              for (int c = 0; c < 3; ++c) sum[c] += std::abs(double(src[c]));
+            }
+            for (int c = 0; c < 3; ++c) {
+              const double error = std::abs(double(scan.at(x, y, z)[c]) - ordered.at(x, y, z)[c]);
+              if (sum[c] > 0) worst_ratio = std::max(worst_ratio, error / (u * sum[c]));
+              ASSERT_LE(error, u * roundings * sum[c])
+                  << s.name << " N " << s.pattern.size_n << " k " << k << " segment " << segment << " at " << x << ","
+                  << y << " layer " << z;
+            }
+          }
+    }
+  RecordProperty("worst_error_in_u_times_S", std::to_string(worst_ratio));
+}
+
+TEST(CpuReferences, ScanRefusesBracketedPrecisions) {
+  const PackedScene s = packed_scenes().front();
+  EXPECT_THROW(flag_horizontal_scan(s.packed, s.pattern, LayerPrecision::unorm10_bracketed), std::invalid_argument);
+}
+
 // Images narrower than a vector and a strip, and one row high.
 TEST(CpuReferences, FastReferencesOnTinyImages) {
   const GatherPattern p{5, 1};

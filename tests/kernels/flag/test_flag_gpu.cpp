@@ -75,13 +75,18 @@ TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
     const Image gpu = run_gpu(context(), find_method(method), s.color, s.depth_m, lens, options_for(method, pattern, "f32"));
     EXPECT_LT(max_rel_error(gpu, reference), 1e-5) << method;
   }
+  FilterOptions scan = options_for("flag", pattern, "f32");
+  scan.values["horizontal_bins"] = 3;  // "scan"
+  EXPECT_LT(max_rel_error(run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, scan), reference), 1e-5)
+      << "flag, scan bins";
 }
 
-// Every block of outputs per invocation (gather_block, horizontal_block) and either binning of FLAG's
-// horizontal pass (horizontal_bins) keeps each pixel's order of additions, so on the same packed
-// input the GPU gives the strictly ordered CPU references' image bit for bit: naive_gather_reference,
-// and for f32 layers flag_blur_reference. Run on the packed input the GPU's CoC pass wrote (its
-// divisions may round differently from the CPU's).
+// Every block of outputs per invocation (gather_block, horizontal_block) and the indexed and masked
+// binnings of FLAG's horizontal pass (horizontal_bins) keep each pixel's order of additions, so on the
+// same packed input the GPU gives the strictly ordered CPU references' image bit for bit:
+// naive_gather_reference, and for f32 layers flag_blur_reference. The scan binning sums in its own
+// order: bit for bit its CPU mirror, flag_horizontal_scan. Run on the packed input the GPU's CoC pass
+// wrote (its divisions may round differently from the CPU's).
 TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
   const Case c = GetParam();
   const Scene s = make_scene(c.scene, 63, 46);  // partial blocks and workgroups at the right and bottom
@@ -104,11 +109,34 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
       auto filter = find_method(v.method).make_gpu(frame, o);
       gpu::run_frames(frame, *filter, timer);
       const Image packed = frame.read_packed();
-      const Image reference = std::string(v.method) == "naive"
-                                  ? naive_gather_reference(packed, pattern, 2)
-                                  : flag_blur_reference(packed, pattern, LayerPrecision::f32, 2);
+      const bool scan = std::string(v.method) == "flag" &&
+                        flag_horizontal_binning(flag_config(o).horizontal_bins, context().info(), pattern.layers()) ==
+                            FlagHorizontalBins::scan;
+      const Image reference =
+          std::string(v.method) == "naive" ? naive_gather_reference(packed, pattern, 2)
+          : scan ? flag_vertical(flag_horizontal_scan(packed, pattern, LayerPrecision::f32), pattern, 2)
+                 : flag_blur_reference(packed, pattern, LayerPrecision::f32, 2);
       EXPECT_TRUE(same_bits(frame.read_output(), reference)) << v.method << " " << v.option << " " << v.choices[choice];
     }
+}
+
+// The scan binning across segments: frames wider than one segment of kFlagScanSegment columns per
+// phase (the last one partial), every phase, samples reaching across segment boundaries; the GPU's
+// output equals the vertical pass over its CPU mirror's layers bit for bit.
+TEST(FlagScan, EqualsItsCpuMirrorBitForBitAcrossSegments) {
+  for (const GatherPattern pattern : {GatherPattern{21, 2}, GatherPattern{9, 3}, GatherPattern{41, 1}}) {
+    const Scene s = make_scene("hoops", kFlagScanSegment * pattern.spacing_px + 77, 16);
+    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+    vk::TimestampQueries timer(context(), 16);
+    FilterOptions o = options_for("flag", pattern, "f32");
+    o.values["horizontal_bins"] = 3;  // "scan"
+    auto filter = find_method("flag").make_gpu(frame, o);
+    gpu::run_frames(frame, *filter, timer);
+    const Image packed = frame.read_packed();
+    const Image mirror = flag_vertical(flag_horizontal_scan(packed, pattern, LayerPrecision::f32), pattern, 2);
+    EXPECT_TRUE(same_bits(frame.read_output(), mirror)) << "N " << pattern.size_n << " k " << pattern.spacing_px;
+  }
 }
 
 // RGBA16F layers: every stored layer value is a sum of non-negative terms rounded once to half,
@@ -123,13 +151,20 @@ TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
   const FilterOptions f16 = options_for("flag", pattern, "f16");
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
   const Image reference = run_cpu(find_method("naive"), s.color, s.depth_m, lens, options_for("naive", pattern, "f32"), 2);
-  const Image gpu16 = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, f16);
   const Image cpu16 = run_cpu(find_method("flag"), s.color, s.depth_m, lens, f16, 2);
   const double round_to_nearest = std::ldexp(1.0, -11), round_toward_zero = std::ldexp(1.0, -10);
+  for (const char* bins : {"auto", "scan"}) {
+    FilterOptions o = f16;
+    o.values["horizontal_bins"] = std::string(bins) == "scan" ? 3 : 0;
+    const Image gpu16 = run_gpu(context(), find_method("flag"), s.color, s.depth_m, lens, o);
+    for (std::size_t i = 0; i < reference.pixels.size(); ++i) {
+      const double ref = std::abs(reference.pixels[i]);
+      ASSERT_LE(std::abs(gpu16.pixels[i] - reference.pixels[i]), round_toward_zero * ref * (1 + 1e-3) + 1e-6)
+          << "GPU, " << bins << " bins, value " << i;
+    }
+  }
   for (std::size_t i = 0; i < reference.pixels.size(); ++i) {
     const double ref = std::abs(reference.pixels[i]);
-    ASSERT_LE(std::abs(gpu16.pixels[i] - reference.pixels[i]), round_toward_zero * ref * (1 + 1e-3) + 1e-6)
-        << "GPU, value " << i;
     ASSERT_LE(std::abs(cpu16.pixels[i] - reference.pixels[i]), round_to_nearest * ref * (1 + 1e-3) + 1e-6)
         << "CPU f16 emulation, value " << i;
   }
@@ -166,6 +201,7 @@ TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
   };
   const Scene s = make_scene("points", 48, 40);
   gpu::GpuFrame frame(context(), s.color, s.depth_m, s.lens, o.pattern);
+  o.values["horizontal_bins"] = 1;   // "indexed" (auto's scan runs no block)
   o.values["horizontal_block"] = 3;  // "4": 4 x 101 layers
   expect_refused_if_bounded(frame, o);
   o.values["horizontal_block"] = 0;  // auto
@@ -175,20 +211,41 @@ TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
   expect_refused_if_bounded(frame81, bracketed);
 }
 
-// horizontal_bins = auto: masked bins on CPU devices while lavapipe unrolls the loop over them (32
-// layers), indexed beyond and on GPUs; an explicit choice is taken as it is.
-TEST(FlagBins, AutoIsMaskedOnCpuDevicesUpTo32Layers) {
+// The scan's private array is kFlagScanSegment vec3 whatever N (flag_gpu.cpp: lavapipe computed wrong
+// layers past ~324 vec3 of the bins): at the largest pattern (N = 201, 101 layers) and single lights
+// reaching past the frame, its CPU mirror bit for bit.
+TEST(FlagScan, WorksAtTheLargestPattern) {
+  const GatherPattern pattern{201, 1};
+  const Scene s = make_scene("points", 48, 40);
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  vk::TimestampQueries timer(context(), 16);
+  FilterOptions o = options_for("flag", pattern, "f32");
+  o.values["horizontal_bins"] = 3;  // "scan"
+  auto filter = find_method("flag").make_gpu(frame, o);
+  gpu::run_frames(frame, *filter, timer);
+  const Image mirror =
+      flag_vertical(flag_horizontal_scan(frame.read_packed(), pattern, LayerPrecision::f32), pattern, 2);
+  EXPECT_TRUE(same_bits(frame.read_output(), mirror));
+}
+
+// horizontal_bins = auto: on CPU devices masked bins up to 21 layers, scan beyond; indexed on GPUs.
+// An explicit choice is taken as it is.
+TEST(FlagBins, AutoIsMaskedThenScanOnCpuDevicesAndIndexedOnGpus) {
   const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{41, 2}, "f16");
   auto bins = [&o] { return flag_config(o).horizontal_bins; };
-  EXPECT_TRUE(flag_masked_bins(bins(), software, 21));
-  EXPECT_TRUE(flag_masked_bins(bins(), software, 32));
-  EXPECT_FALSE(flag_masked_bins(bins(), software, 33));
-  EXPECT_FALSE(flag_masked_bins(bins(), gpu, 21));
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 21), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 22), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 101), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 21), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 81), FlagHorizontalBins::indexed);
   o.values["horizontal_bins"] = 2;  // "masked"
-  EXPECT_TRUE(flag_masked_bins(bins(), gpu, 81));
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 81), FlagHorizontalBins::masked);
   o.values["horizontal_bins"] = 1;  // "indexed"
-  EXPECT_FALSE(flag_masked_bins(bins(), software, 21));
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 81), FlagHorizontalBins::indexed);
+  o.values["horizontal_bins"] = 3;  // "scan"
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 21), FlagHorizontalBins::scan);
 }
 
 // The typed configs read every choice as the choice it names: the enums and parsers follow the
@@ -198,7 +255,8 @@ TEST(MethodConfig, EveryChoiceParsesAsTheOneItNames) {
   flag.buffer_scale = 2;
   const std::map<std::string, FlagHorizontalBins> bins = {{"auto", FlagHorizontalBins::automatic},
                                                           {"indexed", FlagHorizontalBins::indexed},
-                                                          {"masked", FlagHorizontalBins::masked}};
+                                                          {"masked", FlagHorizontalBins::masked},
+                                                          {"scan", FlagHorizontalBins::scan}};
   ASSERT_EQ(flag_horizontal_bins().size(), bins.size());
   for (std::size_t i = 0; i < bins.size(); ++i) {
     flag.values["horizontal_bins"] = static_cast<double>(i);
