@@ -14,7 +14,7 @@ namespace bokeh {
 namespace {
 
 struct AbOptions {
-  std::string baseline, candidate, sweep = "figure9 --quick", json_out;
+  std::string baseline, candidate, sweep = "figure9 --quick --methods all", json_out;
   double threshold_pct = 5;
   paired::Options run;
 };

@@ -31,7 +31,7 @@ struct SelftestOptions {
   int runs = 20, injected_runs = 5;
   std::vector<double> slowdowns_pct = {10, 25};
   double threshold_pct = 5;  // what .ci/regression uses
-  std::string sweep = "figure9 --quick";
+  std::string sweep = "figure9 --quick --methods all";
   std::string out = "results/selftest_compare.json";
 };
 
