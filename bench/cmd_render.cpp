@@ -48,12 +48,13 @@ void write_comparison(const Scene& scene, const Image& result, float max_radius_
   ExactReferenceCache cache(o.reference_cache);
   const ExactReferences refs = exact_references(scene, scene.lens, max_radius_px, cache);
   const nlohmann::json error = error_json(result, refs);
-  for (const char* which : {"vs_energy_sum", "vs_depth_ordered"}) {
+  fmt::print("  (interior: {} px in from every side, the largest CoC radius)\n", refs.interior_margin_px);
+  for (const char* which : {"vs_energy_sum", "vs_depth_ordered", "vs_energy_sum_interior", "vs_depth_ordered_interior"}) {
     const auto& m = error[which];
     auto number = [&](const char* key, const char* format) {
       return m[key].is_null() ? std::string("n/a") : fmt::format(fmt::runtime(format), m[key].get<double>());
     };
-    fmt::print("  {:<17} PSNR {:>8}  RMSE {}  max |err| {}  energy err {}  SSIM {}\n", which,
+    fmt::print("  {:<26} PSNR {:>8}  RMSE {}  max |err| {}  energy err {}  SSIM {}\n", which,
                psnr_text(m),
                number("rmse", "{:.4g}"), number("max_abs_error", "{:.4g}"),
                number("mean_relative_energy_error", "{:.2e}"), number("ssim", "{:.4f}"));

@@ -15,8 +15,10 @@ ExactReferences exact_references(const Scene& scene, const Lens& lens, float max
                                  ExactReferenceCache& cache) {
   const Image radius = coc_radius_image(scene.depth_m, lens, max_radius_px);
   const auto start = std::chrono::steady_clock::now();
+  const float largest_radius_px = *std::max_element(radius.pixels.begin(), radius.pixels.end());
   ExactReferences refs{cache.get(scene.color, radius, scene.depth_m, ScatterComposite::energy_sum),
-                       cache.get(scene.color, radius, scene.depth_m, ScatterComposite::depth_ordered)};
+                       cache.get(scene.color, radius, scene.depth_m, ScatterComposite::depth_ordered),
+                       static_cast<int>(std::ceil(largest_radius_px))};
   fmt::print("exact references for {}x{}, max radius {} px: {:.2f} s (cache: {})\n", scene.color.width,
              scene.color.height, max_radius_px,
              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
@@ -56,7 +58,12 @@ nlohmann::json error_json(const Image& result, const ExactReferences& references
     fmt::print(stderr, "warning: the result has {} non-finite values (inf/NaN): its metrics are null\n", non_finite);
   return {{"vs_energy_sum", metrics_json(compare_images(result, references.energy_sum))},
           {"vs_depth_ordered", metrics_json(compare_images(result, references.depth_ordered))},
-          {"non_finite_values", non_finite}};
+          {"non_finite_values", non_finite},
+          {"interior_margin_px", references.interior_margin_px},
+          {"vs_energy_sum_interior",
+           metrics_json(compare_interior(result, references.energy_sum, references.interior_margin_px))},
+          {"vs_depth_ordered_interior",
+           metrics_json(compare_interior(result, references.depth_ordered, references.interior_margin_px))}};
 }
 
 }  // namespace bokeh

@@ -1,7 +1,10 @@
 #pragma once
 // Circular separable convolution depth of field (Garcia, GDC 2018), CPU reference. A horizontal pass
 // writes, per component, the complex response of every channel; a vertical pass convolves those with
-// the same complex taps and combines them with the weights A, B. Image borders clamp to the edge.
+// the same complex taps and combines them with the weights A, B. Image borders clamp to the edge, as
+// Garcia's texture sampler does: light enters from beyond the border, unlike the exact reference's
+// convention (exact_scatter.hpp), so within the largest CoC of the border the interior metrics are the
+// fair measure (adaptive, fully_defocused, 800x600, 40 px: 23.0 dB whole, 30.7 dB interior).
 #include <cstdint>
 #include <string>
 #include <vector>

@@ -27,6 +27,11 @@ std::string to_string(ScatterComposite mode);
 //   w_s(t)        = coverage_s(t) / area_s, so sum_t w_s(t) = 1.
 // r <= 0.5 puts the disc inside its own pixel: w_s(s) = 1 and nothing else (the identity).
 //
+// The border convention (README, Accuracy): only pixels of the image are sources, each normalised by its
+// whole disc; the share falling beyond the border is lost and nothing comes in from beyond it. Within
+// the largest radius of the border a uniform image therefore darkens (to about a quarter at a corner);
+// further in it stays uniform. Naive and FLAG follow this; methods that clamp to the edge or renormalise
+// say so in their headers, and every result also carries its metrics over the interior alone.
 // energy_sum:    out(t) = sum_s w_s(t) colour(s). Contributions landing outside the image are lost.
 // depth_ordered: a source is a surface patch; w_s(t) is the fraction of target t's view through the
 //   aperture that the patch occupies. Sources are taken front to back (ascending depth_m); sources of

@@ -119,6 +119,22 @@ ErrorMetrics compare_images(const Image& result, const Image& reference) {
   return m;
 }
 
+ErrorMetrics compare_interior(const Image& result, const Image& reference, int margin_px) {
+  check_comparable(result, reference, "compare_interior");
+  const int m = std::max(margin_px, 0), w = reference.width - 2 * m, h = reference.height - 2 * m;
+  if (w <= 0 || h <= 0) {
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    return {kNaN, kNaN, kNaN, kNaN, kNaN};
+  }
+  auto crop = [&](const Image& image) {
+    Image inner(w, h, image.channels);
+    for (int y = 0; y < h; ++y)
+      std::copy_n(image.px(m, y + m), static_cast<std::size_t>(w) * image.channels, inner.px(0, y));
+    return inner;
+  };
+  return compare_images(crop(result), crop(reference));
+}
+
 Image to_display_srgb(const Image& linear) {
   Image display = tone_map_for_display(linear);
   for (float& v : display.pixels) v = static_cast<float>(encode_srgb(v));

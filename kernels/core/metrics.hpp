@@ -34,6 +34,12 @@ struct ErrorMetrics {
 
 ErrorMetrics compare_images(const Image& result, const Image& reference);
 
+// compare_images over the interior: both images cropped by margin_px on every side (the peak is the
+// cropped reference's). With margin_px = the largest CoC radius, no pixel there receives light from
+// beyond the border, so a result's error there is its own, not the border convention's (README,
+// Accuracy). Every metric is NaN when nothing is left (2 margin_px >= width or height).
+ErrorMetrics compare_interior(const Image& result, const Image& reference, int margin_px);
+
 // Display images below hold sRGB-encoded values in [0,1], ready to store as 8 bit without further
 // transforms (write_image would tone-map them again, so use write_display_image, image_io.hpp).
 

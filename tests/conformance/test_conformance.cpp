@@ -3,7 +3,7 @@
 // block shape, adaptive = on), checked against what the method itself declares (method.hpp). A new
 // method or option is covered without editing this file.
 //   GPU vs CPU reference: max |GPU - CPU| <= gpu_tolerance x the reference's largest value, and the
-//   passes the GPU stamps are the ones the work model names.
+//   passes the GPU stamps are the ones the work model names, on hoops and on fully_defocused.
 //   Radius 0 (a pinhole lens) is the identity, up to storage_tolerance x the largest value.
 //   Energy: at a constant radius with a black border wider than any kernel, the output's total equals
 //   the input's (methods that declare they conserve it), up to storage_tolerance x the largest value
@@ -82,25 +82,30 @@ class Conformance : public ::testing::TestWithParam<Config> {};
 TEST_P(Conformance, GpuMatchesCpuReferenceWithinTheStatedBound) {
   const Config c = GetParam();
   skip_if_device_lacks(*c.method, c.options);
-  const Scene s = make_scene("hoops", 63, 46);  // not multiples of 4 or 8: partial blocks and workgroups
-  // 1.2x: some pixels clamp at the largest radius, the rest spread below it.
-  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2);
-  const Image cpu = run_cpu(*c.method, s.color, s.depth_m, lens, c.options, 2);
-  std::vector<vk::PassTime> passes;
-  const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options, &passes);
-  // The work model names the passes the GPU driver stamps, in the same order (CoC first).
-  std::vector<std::string> timed, modelled = {"coc"};
-  for (const auto& p : passes) timed.push_back(p.pass);
-  for (const auto& w : c.method->work(c.options, s.color.width, s.color.height)) modelled.push_back(w.pass);
-  EXPECT_EQ(timed, modelled);
-  ASSERT_TRUE(gpu.same_shape(cpu));
-  for (float v : gpu.pixels) ASSERT_TRUE(std::isfinite(v));
-  const double error = max_abs_diff(gpu, cpu) / max_abs(cpu);
-  const double bound = c.method->gpu_tolerance(c.options);
-  std::printf("[conformance] %s %s 1/%d %s: GPU vs CPU %.3g of the largest value (bound %.3g)\n",
-              c.method->name.c_str(), c.options.precision.c_str(), c.options.buffer_scale, choices_text(c).c_str(), error,
-              bound);
-  EXPECT_LE(error, bound);
+  // fully_defocused: every pixel blurs, the border's included, so each method's edge handling (clamped,
+  // skipped or renormalised samples, partial workgroups) is held to the same bound as the rest.
+  for (const char* scene : {"hoops", "fully_defocused"}) {
+    SCOPED_TRACE(scene);
+    const Scene s = make_scene(scene, 63, 46);  // not multiples of 4 or 8: partial blocks and workgroups
+    // 1.2x: some pixels clamp at the largest radius, the rest spread below it.
+    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2);
+    const Image cpu = run_cpu(*c.method, s.color, s.depth_m, lens, c.options, 2);
+    std::vector<vk::PassTime> passes;
+    const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options, &passes);
+    // The work model names the passes the GPU driver stamps, in the same order (CoC first).
+    std::vector<std::string> timed, modelled = {"coc"};
+    for (const auto& p : passes) timed.push_back(p.pass);
+    for (const auto& w : c.method->work(c.options, s.color.width, s.color.height)) modelled.push_back(w.pass);
+    EXPECT_EQ(timed, modelled);
+    ASSERT_TRUE(gpu.same_shape(cpu));
+    for (float v : gpu.pixels) ASSERT_TRUE(std::isfinite(v));
+    const double error = max_abs_diff(gpu, cpu) / max_abs(cpu);
+    const double bound = c.method->gpu_tolerance(c.options);
+    std::printf("[conformance] %s %s %s 1/%d %s: GPU vs CPU %.3g of the largest value (bound %.3g)\n", scene,
+                c.method->name.c_str(), c.options.precision.c_str(), c.options.buffer_scale, choices_text(c).c_str(),
+                error, bound);
+    EXPECT_LE(error, bound);
+  }
 }
 
 TEST_P(Conformance, RadiusZeroIsTheIdentity) {

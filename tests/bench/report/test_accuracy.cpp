@@ -12,7 +12,18 @@ namespace bokeh {
 namespace {
 
 ExactReferences flat_references(float value) {
-  return {Image(6, 4, 3, value), Image(6, 4, 3, value)};
+  return {Image(6, 4, 3, value), Image(6, 4, 3, value), 1};
+}
+
+// The interior blocks sit beside the whole-image ones: an error on the border shows only in the latter.
+TEST(Accuracy, InteriorMetricsLeaveTheBorderOut) {
+  Image result(6, 4, 3, 2.0f);
+  result.px(0, 2)[1] = 3.0f;  // on the left edge
+  const nlohmann::json e = error_json(result, flat_references(2.0f));
+  EXPECT_EQ(e["interior_margin_px"], 1);
+  EXPECT_GT(e["vs_energy_sum"]["rmse"].get<double>(), 0.0);
+  EXPECT_EQ(e["vs_energy_sum_interior"]["rmse"].get<double>(), 0.0);
+  EXPECT_EQ(psnr_text(e["vs_depth_ordered_interior"]), "exact");
 }
 
 TEST(Accuracy, ExactResultRanksAboveEverything) {

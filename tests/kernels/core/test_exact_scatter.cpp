@@ -74,6 +74,23 @@ TEST(ExactScatter, EnergySumConservesEnergyAwayFromBorders) {
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(channel_sum(out_float, k), channel_sum(color, k), 1e-6 * channel_sum(color, k));
 }
 
+// Fully defocused, one radius everywhere: every target in the interior (the radius, rounded up, in
+// from each side) receives a whole disc's worth of in-frame sources, so a uniform image stays uniform
+// there in both modes; toward the border it darkens, the light beyond it never having existed.
+TEST(ExactScatter, UniformImageFullyDefocusedStaysUniformInTheInterior) {
+  constexpr int kW = 40, kH = 32;
+  constexpr float kRadius = 7.3f;
+  const int margin = static_cast<int>(std::ceil(kRadius));
+  const Image color(kW, kH, 3, 2.0f);
+  for (ScatterComposite mode : {ScatterComposite::energy_sum, ScatterComposite::depth_ordered}) {
+    const std::vector<double> out = exact_scatter_double(color, Image(kW, kH, 1, kRadius), Image(kW, kH, 1, 10.0f), mode, 2);
+    for (int y = margin; y < kH - margin; ++y)
+      for (int x = margin; x < kW - margin; ++x)
+        ASSERT_NEAR(out[(static_cast<std::size_t>(y) * kW + x) * 3], 2.0, 1e-9) << to_string(mode) << " " << x << "," << y;
+    if (mode == ScatterComposite::energy_sum) EXPECT_LT(out[0], 2.0 * 0.5);  // a corner keeps about a quarter
+  }
+}
+
 TEST(ExactScatter, UnitPointSpreadsToADiscOfAreaPiRSquared) {
   constexpr int kSize = 31, kC = kSize / 2;
   for (float r : {0.75f, 1.0f, 1.5f, 2.3f, 3.0f, 4.75f, 7.5f, 10.0f, 13.2f}) {

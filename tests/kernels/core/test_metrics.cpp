@@ -47,6 +47,25 @@ TEST(Metrics, PsnrPeakIsTheReferenceMaximum) {
   EXPECT_EQ(black.mean_relative_energy_error, std::numeric_limits<double>::infinity());
 }
 
+// The interior leaves margin_px out on every side: an error there counts in the whole-image metrics
+// only, one inside counts in both, and a margin that leaves nothing gives NaN (null in JSON), not "exact".
+TEST(Metrics, InteriorLeavesTheMarginOut) {
+  const Image reference = gray(8, 6, 2.0f);
+  Image border_error = reference;
+  border_error.px(1, 4)[0] = 3.0f;  // 1 px from the bottom and 1 px from the left
+  EXPECT_GT(compare_images(border_error, reference).rmse, 0.0);
+  const ErrorMetrics inside_clean = compare_interior(border_error, reference, 2);
+  EXPECT_EQ(inside_clean.rmse, 0.0);
+  EXPECT_EQ(inside_clean.psnr_db, std::numeric_limits<double>::infinity());
+  Image inner_error = reference;
+  inner_error.px(2, 3)[1] = 3.0f;  // inside the 4x2 interior of 24 values
+  const ErrorMetrics inside = compare_interior(inner_error, reference, 2);
+  EXPECT_DOUBLE_EQ(inside.rmse, std::sqrt(1.0 / 24.0));
+  EXPECT_DOUBLE_EQ(inside.max_abs_error, 1.0);
+  EXPECT_EQ(compare_interior(inner_error, reference, 0).rmse, compare_images(inner_error, reference).rmse);
+  EXPECT_TRUE(std::isnan(compare_interior(inner_error, reference, 3).rmse));  // 6 - 2 x 3 rows: none left
+}
+
 TEST(Metrics, IdenticalImagesGiveInfinitePsnrAndSsimOneWithoutNaN) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.0f, 20.0f);
