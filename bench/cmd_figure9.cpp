@@ -72,14 +72,79 @@ std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, cons
 
 enum class Metric { wall, cpu };
 
-// The figures of one metric with their intervals: per method and backend (registry order, GPU
-// first) the medians (and the median relative IQR of its points) and the growth exponents over all sizes and over the larger half (where fixed
-// costs such as the CoC pass no longer dominate; per pass too, on the GPU), and naive/FLAG at each
-// N; `settled` and `unsettled` against the targets (the ratios and the larger-half exponents).
+// The figures of one metric with their intervals: per method, variant and backend (registry order,
+// GPU first) the medians (with their points' median relative IQR) and the growth exponents over all
+// sizes and over the larger half (where fixed costs such as the CoC pass no longer dominate; per pass
+// too, on the GPU), and naive/FLAG at each N; `unsettled` lists the ratios and larger-half exponents
+// wider than the targets.
 struct Figures {
   nlohmann::json series = nlohmann::json::array(), naive_over_flag = nlohmann::json::array();
   std::vector<std::string> unsettled;
 };
+
+const RoundValues& values_of(const RoundPoint& p, Metric metric) { return metric == Metric::wall ? p.wall_ms : p.cpu_ms; }
+
+// The growth exponent of `curve` (one point per n) over its points from `from` on: fitted to each
+// round's own curve, then the median over rounds. A round's points are measured within seconds of
+// each other, so a slow phase of the machine (this VM ran 1.3-1.5x slower for 12 of 27 rounds)
+// scales a whole round's curve and leaves its exponent; a fit of per-point medians over all rounds
+// mixes the phases, point by point, and measured 1.30 [1.15, 1.99] for naive on lavapipe where the
+// per-round fits gave 1.76 [1.70, 1.82] (quartiles).
+Interval exponent(const RoundBootstrap& bootstrap, const std::vector<const RoundValues*>& curve,
+                  const std::vector<double>& n, std::size_t from) {
+  const std::vector<double> x(n.begin() + static_cast<std::ptrdiff_t>(from), n.end());
+  RoundValues per_round;  // the exponent of each round with a sample at every n
+  for (int round : bootstrap.rounds()) {
+    std::vector<double> y;
+    for (std::size_t i = from; i < curve.size(); ++i)
+      if (auto it = curve[i]->find(round); it != curve[i]->end() && it->second > 0) y.push_back(it->second);
+    if (y.size() == x.size()) per_round[round] = fit_power_law(x, y).exponent;
+  }
+  return bootstrap.interval([&](const std::vector<int>& drawn) { return median_over(per_round, drawn); });
+}
+
+// One curve (a method's variant on a backend, points in N order): medians and exponents.
+nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metric, const RoundBootstrap& bootstrap,
+                          bool headlines_only) {
+  std::vector<double> n, medians, low, high, iqr;
+  std::vector<const RoundValues*> curve;
+  for (const auto* p : pts) {
+    const RoundValues& v = values_of(*p, metric);
+    n.push_back(p->n);
+    curve.push_back(&v);
+    std::vector<double> samples;
+    for (const auto& [round, ms] : v) samples.push_back(ms);
+    iqr.push_back(runner::distribution(samples).relative_iqr());
+    medians.push_back(runner::quantile(samples, 0.5));
+    const Interval median =
+        headlines_only ? Interval{} : bootstrap.interval([&](const std::vector<int>& d) { return median_over(v, d); });
+    low.push_back(median.low);
+    high.push_back(median.high);
+  }
+  nlohmann::json fits = nlohmann::json::object();
+  const std::size_t half = n.size() / 2;
+  for (auto [name, from] : {std::pair{"all_sizes", std::size_t{0}}, std::pair{"larger_half", half}}) {
+    if (n.size() - from < 2 || (headlines_only && from == 0)) continue;
+    const Interval b = exponent(bootstrap, curve, n, from);
+    const auto at = static_cast<std::ptrdiff_t>(from);
+    const PowerLawFit fit = fit_power_law({n.begin() + at, n.end()}, {medians.begin() + at, medians.end()});
+    // exponent: the median of the per-round fits (exponent()); coefficient and r^2: the medians' fit.
+    fits[name] = {{"exponent", b.estimate}, {"low", b.low},       {"high", b.high},
+                  {"coefficient_ms", fit.coefficient}, {"r_squared", fit.r_squared}, {"points", fit.points},
+                  {"N", std::vector<double>(n.begin() + at, n.end())}};
+  }
+  nlohmann::json pass_fits = nlohmann::json::object();
+  if (metric == Metric::wall && !headlines_only && n.size() - half >= 2)
+    for (const auto& [pass, unused] : pts.front()->pass_ms) {
+      std::vector<const RoundValues*> pass_curve;
+      for (const auto* p : pts)
+        if (auto it = p->pass_ms.find(pass); it != p->pass_ms.end()) pass_curve.push_back(&it->second);
+      if (pass_curve.size() == pts.size()) pass_fits[pass] = interval_json(exponent(bootstrap, pass_curve, n, half));
+    }
+  std::sort(iqr.begin(), iqr.end());
+  return {{"N", n}, {"median_ms", medians}, {"median_ms_low", low}, {"median_ms_high", high},
+          {"median_relative_iqr", iqr[iqr.size() / 2]}, {"fits", fits}, {"pass_fits_larger_half", pass_fits}};
+}
 
 // `headlines_only`: the ratios and larger-half exponents alone (what the stopping rule reads).
 Figures figures(const std::vector<RoundPoint>& points, Metric metric, double target_ratio, double target_exponent,
@@ -90,76 +155,35 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
   std::vector<int> all(static_cast<std::size_t>(rounds));
   std::iota(all.begin(), all.end(), 0);
   const RoundBootstrap bootstrap(all);
-  auto values = [metric](const RoundPoint& p) -> const RoundValues& { return metric == Metric::wall ? p.wall_ms : p.cpu_ms; };
   Figures out;
-  auto exponent = [&](const std::vector<const RoundValues*>& curve, const std::vector<double>& n, std::size_t from) {
-    const std::vector<double> x(n.begin() + static_cast<std::ptrdiff_t>(from), n.end());
-    return bootstrap.interval([&](const std::vector<int>& drawn) {
-      std::vector<double> y;
-      for (std::size_t i = from; i < curve.size(); ++i) y.push_back(median_over(*curve[i], drawn));
-      for (double v : y)
-        if (!(v > 0)) return std::numeric_limits<double>::quiet_NaN();
-      return fit_power_law(x, y).exponent;
-    });
-  };
   std::set<std::string> variants;
   for (const auto& p : points) variants.insert(p.variant);
   for (const Method& m : registered_methods())
     for (const std::string& variant : variants)
-    for (const char* backend : {"gpu", "cpu"}) {
-      std::vector<const RoundPoint*> pts;
-      for (const auto& p : points)
-        if (p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
-      if (pts.empty()) continue;
-      const std::string label = m.name + variant;
-      std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
-      std::vector<double> n, medians, low, high, iqr;
-      std::vector<const RoundValues*> curve;
-      for (const auto* p : pts) {
-        n.push_back(p->n);
-        curve.push_back(&values(*p));
-        std::vector<double> samples;
-        for (const auto& [round, ms] : values(*p)) samples.push_back(ms);
-        iqr.push_back(runner::distribution(samples).relative_iqr());
-        const Interval median =
-            headlines_only ? Interval{}
-                           : bootstrap.interval([&](const std::vector<int>& d) { return median_over(values(*p), d); });
-        medians.push_back(runner::quantile(samples, 0.5));
-        low.push_back(median.low);
-        high.push_back(median.high);
-      }
-      nlohmann::json fits = nlohmann::json::object();
-      const std::size_t half = n.size() / 2;
-      for (auto [name, from] : {std::pair{"all_sizes", std::size_t{0}}, std::pair{"larger_half", half}}) {
-        if (n.size() - from < 2 || (headlines_only && from == 0)) continue;
-        const Interval b = exponent(curve, n, from);
-        const auto at = static_cast<std::ptrdiff_t>(from);
-        const PowerLawFit fit = fit_power_law({n.begin() + at, n.end()}, {medians.begin() + at, medians.end()});
-        fits[name] = {{"exponent", fit.exponent}, {"low", b.low}, {"high", b.high}, {"coefficient_ms", fit.coefficient},
-                      {"r_squared", fit.r_squared}, {"points", fit.points}, {"N", std::vector<double>(n.begin() + at, n.end())}};
-        if (name == std::string("larger_half") && !(b.half_width() <= target_exponent))
-          out.unsettled.push_back(fmt::format("{} {} exponent {:.2f} +-{:.2f}", label, backend, b.estimate, b.half_width()));
-      }
-      nlohmann::json pass_fits = nlohmann::json::object();
-      if (metric == Metric::wall && !headlines_only && n.size() - half >= 2)
-        for (const auto& [pass, unused] : pts.front()->pass_ms) {
-          std::vector<const RoundValues*> pass_curve;
-          for (const auto* p : pts)
-            if (auto it = p->pass_ms.find(pass); it != p->pass_ms.end()) pass_curve.push_back(&it->second);
-          if (pass_curve.size() == pts.size()) pass_fits[pass] = interval_json(exponent(pass_curve, n, half));
+      for (const char* backend : {"gpu", "cpu"}) {
+        std::vector<const RoundPoint*> pts;
+        for (const auto& p : points)
+          if (p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
+        if (pts.empty()) continue;
+        std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
+        nlohmann::json curve = curve_json(pts, metric, bootstrap, headlines_only);
+        if (curve["fits"].contains("larger_half")) {
+          const auto& f = curve["fits"]["larger_half"];
+          const double half_width = (f["high"].get<double>() - f["low"].get<double>()) / 2;
+          if (!(half_width <= target_exponent))
+            out.unsettled.push_back(fmt::format("{}{} {} exponent {:.2f} +-{:.2f}", m.name, variant, backend,
+                                                f["exponent"].get<double>(), half_width));
         }
-      std::sort(iqr.begin(), iqr.end());
-      out.series.push_back({{"method", m.name}, {"variant", variant}, {"backend", backend}, {"N", n}, {"median_ms", medians},
-                            {"median_ms_low", low}, {"median_ms_high", high},
-                            {"median_relative_iqr", iqr[iqr.size() / 2]}, {"fits", fits},
-                            {"pass_fits_larger_half", pass_fits}});
-    }
+        curve.update({{"method", m.name}, {"variant", variant}, {"backend", backend}});
+        out.series.push_back(std::move(curve));
+      }
   // The paper's comparison: both at their defaults.
   for (const auto& a : points) {
     if (a.method != "naive" || !a.variant.empty()) continue;
     for (const auto& b : points) {
       if (b.method != "flag" || !b.variant.empty() || b.backend != a.backend || b.n != a.n) continue;
-      const Interval r = bootstrap.interval([&](const std::vector<int>& d) { return paired_ratio(values(a), values(b), d); });
+      const Interval r = bootstrap.interval(
+          [&](const std::vector<int>& d) { return paired_ratio(values_of(a, metric), values_of(b, metric), d); });
       const bool settled = r.relative_half_width() <= target_ratio;
       out.naive_over_flag.push_back(
           {{"N", a.n}, {"backend", a.backend}, {"naive_over_flag", r.estimate}, {"low", r.low}, {"high", r.high},
@@ -293,9 +317,9 @@ void add_figure9_command(CLI::App& app) {
   auto o = std::make_shared<Figure9Options>();
   auto* cmd = app.add_subcommand("figure9", "Reproduce FLAG paper Figure 9: frame time vs gather size, naive vs FLAG");
   AxisFlags& a = o->axes;
-  // At k = 2, as the paper, from its small sizes to N = 121 (a 120 px largest CoC), where naive's quadratic
+  // At k = 2, as the paper, from its small sizes to N = 153 (a 152 px largest CoC), where naive's quadratic
   // growth has left FLAG's linear one far behind on lavapipe too (at N = 41 the two are still close there).
-  a.sizes = {"9", "25", "41", "57", "73", "89", "105", "121"};
+  a.sizes = {"9", "33", "57", "81", "105", "129", "153"};
   a.resolutions = {"800x600"};
   a.scenes = {"hoops"};
   a.backends = {"gpu", "cpu"};

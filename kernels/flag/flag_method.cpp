@@ -154,8 +154,10 @@ void declare_flag(std::vector<Method>& methods) {
                                "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "
                                "GPU when the run is prepared, one int read back), a tile-max CoC map bounding each "
                                "workgroup's row samples and each tile's layers, and tiles nothing blurred reaches "
-                               "output their input: the worst case's image bit for bit (f32), or up to one rounding "
-                               "of the layer format in those tiles"),
+                               "output their input: the worst case's image bit for bit (f32; with scan bins, to f32 "
+                               "rounding: a layer nothing reaches keeps the scan's rounding residue, which the worst "
+                               "case adds and adaptive skips), or up to one rounding of the layer format in those "
+                               "tiles"),
                adaptive_tile_option()};
   // Every function below parses the options once (flag_config) and reads only the FlagConfig.
   m.device = [](const FilterOptions& o) {
