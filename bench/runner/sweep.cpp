@@ -413,8 +413,9 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
     order.push_back(ids);
   }
   nlohmann::json measurement = {
-      {"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded); "
-                      "each visit takes one sample of frames_per_sample frames"},
+      {"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded; points the "
+                      "command compares with each other back to back, taking turns going first); each visit takes "
+                      "one sample of frames_per_sample frames"},
       {"seed", s.policy.seed},
       {"budget_s", s.policy.budget_s},
       {"min_samples", s.policy.min_samples},

@@ -120,22 +120,26 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
     }
 }
 
+// FLAG with scan bins on the GPU against the vertical pass over its CPU mirror's layers: bit for bit.
+bool scan_equals_cpu_mirror(const Scene& s, const GatherPattern& pattern, double coc_scale) {
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * coc_scale);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  vk::TimestampQueries timer(context(), 16);
+  FilterOptions o = options_for("flag", pattern, "f32");
+  o.values["horizontal_bins"] = 3;  // "scan"
+  auto filter = find_method("flag").make_gpu(frame, o);
+  gpu::run_frames(frame, *filter, timer);
+  const Image mirror =
+      flag_vertical(flag_horizontal_scan(frame.read_packed(), pattern, LayerPrecision::f32), pattern, 2);
+  return same_bits(frame.read_output(), mirror);
+}
+
 // The scan binning across segments: frames wider than one segment of kFlagScanSegment columns per
-// phase (the last one partial), every phase, samples reaching across segment boundaries; the GPU's
-// output equals the vertical pass over its CPU mirror's layers bit for bit.
+// phase (the last one partial), every phase, samples reaching across segment boundaries.
 TEST(FlagScan, EqualsItsCpuMirrorBitForBitAcrossSegments) {
   for (const GatherPattern pattern : {GatherPattern{21, 2}, GatherPattern{9, 3}, GatherPattern{41, 1}}) {
     const Scene s = make_scene("hoops", kFlagScanSegment * pattern.spacing_px + 77, 16);
-    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-    vk::TimestampQueries timer(context(), 16);
-    FilterOptions o = options_for("flag", pattern, "f32");
-    o.values["horizontal_bins"] = 3;  // "scan"
-    auto filter = find_method("flag").make_gpu(frame, o);
-    gpu::run_frames(frame, *filter, timer);
-    const Image packed = frame.read_packed();
-    const Image mirror = flag_vertical(flag_horizontal_scan(packed, pattern, LayerPrecision::f32), pattern, 2);
-    EXPECT_TRUE(same_bits(frame.read_output(), mirror)) << "N " << pattern.size_n << " k " << pattern.spacing_px;
+    EXPECT_TRUE(scan_equals_cpu_mirror(s, pattern, 1.2)) << "N " << pattern.size_n << " k " << pattern.spacing_px;
   }
 }
 
@@ -215,18 +219,7 @@ TEST(GpuExtremes, FlagStaysWithinWhatLavapipeComputesCorrectly) {
 // layers past ~324 vec3 of the bins): at the largest pattern (N = 201, 101 layers) and single lights
 // reaching past the frame, its CPU mirror bit for bit.
 TEST(FlagScan, WorksAtTheLargestPattern) {
-  const GatherPattern pattern{201, 1};
-  const Scene s = make_scene("points", 48, 40);
-  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
-  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-  vk::TimestampQueries timer(context(), 16);
-  FilterOptions o = options_for("flag", pattern, "f32");
-  o.values["horizontal_bins"] = 3;  // "scan"
-  auto filter = find_method("flag").make_gpu(frame, o);
-  gpu::run_frames(frame, *filter, timer);
-  const Image mirror =
-      flag_vertical(flag_horizontal_scan(frame.read_packed(), pattern, LayerPrecision::f32), pattern, 2);
-  EXPECT_TRUE(same_bits(frame.read_output(), mirror));
+  EXPECT_TRUE(scan_equals_cpu_mirror(make_scene("points", 48, 40), GatherPattern{201, 1}, 1.0));
 }
 
 // horizontal_bins = auto: on CPU devices masked bins up to 21 layers, scan beyond; indexed on GPUs.
