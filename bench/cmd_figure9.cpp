@@ -218,10 +218,9 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
       {"cpu_time", {{"series", cpu.series}, {"naive_over_flag", cpu.naive_over_flag}, {"unsettled", cpu.unsettled}}}};
 }
 
-std::string with_interval(const nlohmann::json& i, const char* format) {
-  return fmt::format(fmt::runtime(format), i["estimate"].get<double>()) +
-         fmt::format(fmt::runtime(std::string(" [") + format + ", " + format + "]"), i["low"].get<double>(),
-                     i["high"].get<double>());
+// "1.23 [1.20, 1.26]": an estimate with the 95% interval in `i` (its low and high).
+std::string interval_text(double estimate, const nlohmann::json& i) {
+  return fmt::format("{:.2f} [{:.2f}, {:.2f}]", estimate, i["low"].get<double>(), i["high"].get<double>());
 }
 
 void print_summary(const nlohmann::json& doc) {
@@ -230,15 +229,12 @@ void print_summary(const nlohmann::json& doc) {
   for (const auto& series : doc["series"]) {
     const auto& f = series["fits"];
     auto exponent = [&](const char* which) {
-      if (!f.contains(which)) return std::string("-");
-      return fmt::format("{:.2f} [{:.2f}, {:.2f}]", f[which]["exponent"].get<double>(), f[which]["low"].get<double>(),
-                         f[which]["high"].get<double>());
+      return f.contains(which) ? interval_text(f[which]["exponent"].get<double>(), f[which]) : std::string("-");
     };
     fmt::print("{:<10} {:<4} {:>22} {:>22}\n", series["method"].get<std::string>() + series["variant"].get<std::string>(),
-               series["backend"].get<std::string>(),
-               exponent("larger_half"), exponent("all_sizes"));
+               series["backend"].get<std::string>(), exponent("larger_half"), exponent("all_sizes"));
     for (const auto& [pass, b] : series["pass_fits_larger_half"].items())
-      fmt::print("{:>15} pass {:<12} {:>22}\n", "", pass, with_interval(b, "{:.2f}"));
+      fmt::print("{:>15} pass {:<12} {:>22}\n", "", pass, interval_text(b["estimate"].get<double>(), b));
   }
   for (const auto& r : doc["naive_over_flag"])
     fmt::print("naive / FLAG at N={:<3} ({}): {:.2f}x [{:.2f}, {:.2f}]\n", r["N"].get<int>(), r["backend"].get<std::string>(),
