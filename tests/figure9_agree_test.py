@@ -24,14 +24,17 @@ def agree(other):
 same = agree(doc)
 assert same.returncode == 0, same.stdout + same.stderr
 moved_ratio = copy.deepcopy(doc)
-for key in ("naive_over_flag", "low", "high"):
-    moved_ratio["naive_over_flag"][0][key] *= 1.2
+ratio = moved_ratio["naive_over_flag"][0]
+for key in ("naive_over_flag", "low", "high", "repeat_low", "repeat_high"):
+    if key in ratio:
+        ratio[key] *= 1.2
 r = agree(moved_ratio)
 assert r.returncode == 1 and "DIFFER" in r.stdout, r.stdout
 moved_exponent = copy.deepcopy(doc)
 fit = next(s["fits"]["larger_half"] for s in moved_exponent["series"] if "larger_half" in s["fits"])
-for key in ("exponent", "low", "high"):
-    fit[key] += 0.2
+for key in ("exponent", "low", "high", "repeat_low", "repeat_high"):
+    if key in fit:
+        fit[key] += 0.2
 r = agree(moved_exponent)
 assert r.returncode == 1 and "DIFFER" in r.stdout, r.stdout
 print("figure9_agree: self agrees; a 20% ratio shift and a 0.2 exponent shift are told apart")

@@ -17,6 +17,12 @@ nlohmann::json interval_json(const Interval& interval) {
   return {{"estimate", interval.estimate}, {"low", interval.low}, {"high", interval.high}};
 }
 
+Interval repeat_run(const Interval& confidence) {
+  const double widen = std::sqrt(2.0);
+  return {confidence.estimate, confidence.estimate - widen * (confidence.estimate - confidence.low),
+          confidence.estimate + widen * (confidence.high - confidence.estimate)};
+}
+
 double median_over(const RoundValues& values, const std::vector<int>& rounds) {
   std::vector<double> drawn;
   for (int r : rounds)

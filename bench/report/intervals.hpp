@@ -22,6 +22,14 @@ struct Interval {
 };
 nlohmann::json interval_json(const Interval& interval);  // {"estimate", "low", "high"}
 
+// Where a repeat run on the same machine would put its estimate, at 95%: this run's interval
+// widened by sqrt(2) on each side (the difference of two runs of equal spread has sqrt(2) times
+// one run's standard error). "Run B's estimate lies in run A's confidence interval" is a weaker
+// event than it looks: for calibrated 95% intervals it happens about 83% of the time (|Z| < 1.96 /
+// sqrt(2)), so of 18 figures about 3 miss by chance alone; this interval is the one to hold a
+// repeat run to.
+Interval repeat_run(const Interval& confidence);
+
 // One point's samples by the round they were taken in (one per round at most).
 using RoundValues = std::map<int, double>;
 
