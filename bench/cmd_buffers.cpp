@@ -7,7 +7,8 @@
 // FLAG carries the pattern of its k-px sample grid, which the reduced pipelines, sampling an s x s
 // box-filtered image, do not reproduce, so "error vs full-res FLAG" alone overstates how much worse
 // they look. Points whose buffers exceed --max-buffer-mb are skipped unallocated: lavapipe reports a
-// heap but does not enforce it.
+// heap but does not enforce it. Beside the full, half and quarter buffers, the streamed layers
+// (layer_buffer = streamed, kernels/flag/flag_gpu.hpp) at full resolution, one point per --band-rows.
 #include <fmt/format.h>
 
 #include "accuracy.hpp"
@@ -25,6 +26,7 @@ namespace {
 struct BuffersOptions {
   AxisFlags axes;
   std::vector<double> budget_lines_mib = {64, 16};
+  std::vector<int> band_rows = {0};  // streamed points, one per band height (0: the device's auto)
   SweepFlags sweep;
 };
 
@@ -62,15 +64,19 @@ void buffers(BuffersOptions& o) {
                          "the ceil(W/s) x ceil(H/s) x ceil(ceil(N/2)/s) 3D image; memory.bytes adds the bracket and "
                          "low-res buffers: what --max-buffer-mb is checked against"},
               {"error_reference", "error.vs_flag_f32: CPU FLAG with f32 layers at full resolution, same scene, lens, N "
-                                  "and k (flag_blur_in_strips, bit for bit flag_blur)"}};
+                                  "and k (flag_blur_streamed, bit for bit flag_blur)"},
+              {"band_rows", o.band_rows},
+              {"streamed", "layer_buffer = streamed points: full resolution, each precision, one per band_rows (0: "
+                           "auto); memory.details.streamed has the band and ring rows"}};
   const int threads = o.sweep.cpu_threads;
   s.extra_reference = [threads](const SweepPoint& p, const Scene& scene,
                                 const Lens& lens) -> std::optional<SweepSettings::ExtraReference> {
     return SweepSettings::ExtraReference{
         "flag_f32", fmt::format("{}/{}x{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px), [&scene, lens, p, threads] {
           const CocInput coc = cpu_coc_pass(scene.color, scene.depth_m, lens, p.options.pattern);
-          return flag_blur_in_strips(coc.packed, p.options.pattern, LayerPrecision::f32, 256,
-                                     threads > 0 ? threads : default_cpu_threads());
+          // Bands of 64 rows: a ring of (64 + 2 n k) rows of f32 layers, not the frame's.
+          return flag_blur_streamed(coc.packed, p.options.pattern, LayerPrecision::f32, 64,
+                                    threads > 0 ? threads : default_cpu_threads());
         }};
   };
   const std::vector<double> lines = o.budget_lines_mib;
@@ -100,7 +106,18 @@ void buffers(BuffersOptions& o) {
                    (*p)["flag_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_flag_f32"]));
     }
   };
-  run_sweep(expand(axes), s);
+  std::vector<SweepPoint> points = expand(axes);
+  // The streamed layers at full resolution, beside the full and reduced buffers.
+  const OptionSpec* layer_buffer = flag.option("layer_buffer");
+  const auto streamed = static_cast<double>(std::find(layer_buffer->choices.begin(), layer_buffer->choices.end(),
+                                                      "streamed") - layer_buffer->choices.begin());
+  for (int rows : o.band_rows) {
+    Axes banded = axes;
+    banded.scales = {1};
+    banded.option_values = {{"layer_buffer", streamed}, {"band_rows", rows}};
+    for (auto& p : expand(banded)) points.push_back(std::move(p));
+  }
+  run_sweep(points, s);
 }
 
 }  // namespace
@@ -117,6 +134,10 @@ void add_buffers_command(CLI::App& app) {
   cmd->add_option("--budget-lines", o->budget_lines_mib, "Memory budgets (MiB) to report and draw")
       ->check(finite_number())
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--band-rows", o->band_rows,
+                  "Streamed layers: output rows per band, one point per value at full resolution (0: the device's "
+                  "auto, flag_gpu.hpp)")
+      ->check(CLI::Range(0, 1 << 16));
   o->sweep.add_to(cmd, 240, 512);
   a.add_quick(cmd, "Small sweep for CI and tests (160x120, N = 9 and 13)",
               {{Axis::resolutions, {"160x120"}}, {Axis::sizes, {"9", "13"}}}, 12);
