@@ -9,6 +9,9 @@
 // they look. Points whose buffers exceed --max-buffer-mb are skipped unallocated: lavapipe reports a
 // heap but does not enforce it. Beside the full, half and quarter buffers, the streamed layers
 // (layer_buffer = streamed, kernels/flag/flag_gpu.hpp) at full resolution, one point per --band-rows.
+#include <map>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "accuracy.hpp"
@@ -31,6 +34,31 @@ struct BuffersOptions {
 };
 
 double allocated_mib(const nlohmann::json& point) { return point["memory"]["bytes"].get<double>() / (1024.0 * 1024.0); }
+
+bool is_streamed(const nlohmann::json& point) {
+  return point.contains("options") && point["options"].value("layer_buffer", "") == "streamed";
+}
+
+// The frame of the same resolution, N, k and precision a point is compared with: its streamed and
+// full-resolution buffers are visited back to back in every round (visit_together).
+std::string frame_key(const nlohmann::json& p) {
+  return fmt::format("{}x{}/N:{}/k:{}/{}", p["width_px"].get<int>(), p["height_px"].get<int>(), p["N"].get<int>(),
+                     p["k"].get<int>(), p["precision"].get<std::string>());
+}
+
+// Streamed over full-buffer frame time: the median of the ratios of the rounds in which both took a
+// sample (each round's two samples are adjacent in time: a drifting machine moves both).
+nlohmann::json streamed_vs_full(const nlohmann::json& streamed, const nlohmann::json& full) {
+  std::map<int, double> full_ms;
+  for (std::size_t i = 0; i < full["sample_rounds"].size(); ++i)
+    full_ms[full["sample_rounds"][i].get<int>()] = full["samples_ms"][i].get<double>();
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < streamed["sample_rounds"].size(); ++i)
+    if (auto it = full_ms.find(streamed["sample_rounds"][i].get<int>()); it != full_ms.end() && it->second > 0)
+      ratios.push_back(streamed["samples_ms"][i].get<double>() / it->second);
+  if (ratios.empty()) return nullptr;
+  return {{"frame_ms_ratio_median", runner::quantile(ratios, 0.5)}, {"rounds", ratios.size()}};
+}
 
 void buffers(BuffersOptions& o) {
   o.axes.resolve(&o.sweep);
@@ -79,8 +107,18 @@ void buffers(BuffersOptions& o) {
                                     threads > 0 ? threads : default_cpu_threads());
         }};
   };
+  s.visit_together = [](const SweepPoint& p) {
+    return fmt::format("{}/N:{}/k:{}/{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px,
+                       p.options.precision);
+  };
   const std::vector<double> lines = o.budget_lines_mib;
   s.derive = [lines](nlohmann::json& doc) {
+    for (auto& p : doc["points"]) {
+      if (!is_streamed(p)) continue;
+      for (const auto& full : doc["points"])
+        if (!is_streamed(full) && full["buffer_scale"] == 1 && full["variant"] == "" && frame_key(full) == frame_key(p))
+          p["streamed_vs_full"] = streamed_vs_full(p, full);
+    }
     for (auto& p : doc["points"]) {
       p["fits_mib"] = nlohmann::json::array();
       for (double mib : lines)
@@ -92,6 +130,19 @@ void buffers(BuffersOptions& o) {
     }
   };
   s.summary = [lines](const nlohmann::json& doc) {
+    // Every point (and every skip) by frame: the memory / time / accuracy trade in one table.
+    fmt::print("\n{:<66} {:>10} {:>10} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms", "PSNR", "vs f32", "streamed/full");
+    for (const auto& p : doc["points"]) {
+      std::string ratio;
+      if (p.contains("streamed_vs_full") && !p["streamed_vs_full"].is_null())
+        ratio = fmt::format("{:.2f}x ({} rounds)", p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(),
+                            p["streamed_vs_full"]["rounds"].get<int>());
+      fmt::print("{:<66} {:>10.2f} {:>10.1f} {:>9} {:>10}  {}\n", p["id"].get<std::string>(), allocated_mib(p),
+                 p["frame_ms"]["median"].get<double>(), psnr_text(p["error"]["vs_energy_sum"]),
+                 psnr_text(p["error"]["vs_flag_f32"]), ratio);
+    }
+    for (const auto& sk : doc["skipped"])
+      fmt::print("{:<66} skipped: {}\n", sk.value("id", std::string("?")), sk.value("reason", std::string()));
     for (double mib : lines) {
       fmt::print("\nWithin {} MiB of FLAG buffers (fastest first):\n", mib);
       std::vector<const nlohmann::json*> fit;
