@@ -7,7 +7,11 @@
 // FLAG carries the pattern of its k-px sample grid, which the reduced pipelines, sampling an s x s
 // box-filtered image, do not reproduce, so "error vs full-res FLAG" alone overstates how much worse
 // they look. Points whose buffers exceed --max-buffer-mb are skipped unallocated: lavapipe reports a
-// heap but does not enforce it.
+// heap but does not enforce it. Beside the full, half and quarter buffers, the streamed layers
+// (layer_buffer = streamed, kernels/flag/flag_gpu.hpp) at full resolution, one point per --band-rows.
+#include <map>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "accuracy.hpp"
@@ -25,10 +29,36 @@ namespace {
 struct BuffersOptions {
   AxisFlags axes;
   std::vector<double> budget_lines_mib = {64, 16};
+  std::vector<int> band_rows = {0};  // streamed points, one per band height (0: the device's auto)
   SweepFlags sweep;
 };
 
 double allocated_mib(const nlohmann::json& point) { return point["memory"]["bytes"].get<double>() / (1024.0 * 1024.0); }
+
+bool is_streamed(const nlohmann::json& point) {
+  return point.contains("options") && point["options"].value("layer_buffer", "") == "streamed";
+}
+
+// The frame of the same resolution, N, k and precision a point is compared with: its streamed and
+// full-resolution buffers are visited back to back in every round (visit_together).
+std::string frame_key(const nlohmann::json& p) {
+  return fmt::format("{}x{}/N:{}/k:{}/{}", p["width_px"].get<int>(), p["height_px"].get<int>(), p["N"].get<int>(),
+                     p["k"].get<int>(), p["precision"].get<std::string>());
+}
+
+// Streamed over full-buffer frame time: the median of the ratios of the rounds in which both took a
+// sample (each round's two samples are adjacent in time: a drifting machine moves both).
+nlohmann::json streamed_vs_full(const nlohmann::json& streamed, const nlohmann::json& full) {
+  std::map<int, double> full_ms;
+  for (std::size_t i = 0; i < full["sample_rounds"].size(); ++i)
+    full_ms[full["sample_rounds"][i].get<int>()] = full["samples_ms"][i].get<double>();
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < streamed["sample_rounds"].size(); ++i)
+    if (auto it = full_ms.find(streamed["sample_rounds"][i].get<int>()); it != full_ms.end() && it->second > 0)
+      ratios.push_back(streamed["samples_ms"][i].get<double>() / it->second);
+  if (ratios.empty()) return nullptr;
+  return {{"frame_ms_ratio_median", runner::quantile(ratios, 0.5)}, {"rounds", ratios.size()}};
+}
 
 void buffers(BuffersOptions& o) {
   o.axes.resolve(&o.sweep);
@@ -62,19 +92,33 @@ void buffers(BuffersOptions& o) {
                          "the ceil(W/s) x ceil(H/s) x ceil(ceil(N/2)/s) 3D image; memory.bytes adds the bracket and "
                          "low-res buffers: what --max-buffer-mb is checked against"},
               {"error_reference", "error.vs_flag_f32: CPU FLAG with f32 layers at full resolution, same scene, lens, N "
-                                  "and k (flag_blur_in_strips, bit for bit flag_blur)"}};
+                                  "and k (flag_blur_streamed, bit for bit flag_blur)"},
+              {"band_rows", o.band_rows},
+              {"streamed", "layer_buffer = streamed points: full resolution, each precision, one per band_rows (0: "
+                           "auto); memory.details.streamed has the band and ring rows"}};
   const int threads = o.sweep.cpu_threads;
   s.extra_reference = [threads](const SweepPoint& p, const Scene& scene,
                                 const Lens& lens) -> std::optional<SweepSettings::ExtraReference> {
     return SweepSettings::ExtraReference{
         "flag_f32", fmt::format("{}/{}x{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px), [&scene, lens, p, threads] {
           const CocInput coc = cpu_coc_pass(scene.color, scene.depth_m, lens, p.options.pattern);
-          return flag_blur_in_strips(coc.packed, p.options.pattern, LayerPrecision::f32, 256,
-                                     threads > 0 ? threads : default_cpu_threads());
+          // Bands of 64 rows: a ring of (64 + 2 n k) rows of f32 layers, not the frame's.
+          return flag_blur_streamed(coc.packed, p.options.pattern, LayerPrecision::f32, 64,
+                                    threads > 0 ? threads : default_cpu_threads());
         }};
+  };
+  s.visit_together = [](const SweepPoint& p) {
+    return fmt::format("{}/N:{}/k:{}/{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px,
+                       p.options.precision);
   };
   const std::vector<double> lines = o.budget_lines_mib;
   s.derive = [lines](nlohmann::json& doc) {
+    for (auto& p : doc["points"]) {
+      if (!is_streamed(p)) continue;
+      for (const auto& full : doc["points"])
+        if (!is_streamed(full) && full["buffer_scale"] == 1 && full["variant"] == "" && frame_key(full) == frame_key(p))
+          p["streamed_vs_full"] = streamed_vs_full(p, full);
+    }
     for (auto& p : doc["points"]) {
       p["fits_mib"] = nlohmann::json::array();
       for (double mib : lines)
@@ -86,6 +130,19 @@ void buffers(BuffersOptions& o) {
     }
   };
   s.summary = [lines](const nlohmann::json& doc) {
+    // Every point (and every skip) by frame: the memory / time / accuracy trade in one table.
+    fmt::print("\n{:<66} {:>10} {:>10} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms", "PSNR", "vs f32", "streamed/full");
+    for (const auto& p : doc["points"]) {
+      std::string ratio;
+      if (p.contains("streamed_vs_full") && !p["streamed_vs_full"].is_null())
+        ratio = fmt::format("{:.2f}x ({} rounds)", p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(),
+                            p["streamed_vs_full"]["rounds"].get<int>());
+      fmt::print("{:<66} {:>10.2f} {:>10.1f} {:>9} {:>10}  {}\n", p["id"].get<std::string>(), allocated_mib(p),
+                 p["frame_ms"]["median"].get<double>(), psnr_text(p["error"]["vs_energy_sum"]),
+                 psnr_text(p["error"]["vs_flag_f32"]), ratio);
+    }
+    for (const auto& sk : doc["skipped"])
+      fmt::print("{:<66} skipped: {}\n", sk.value("id", std::string("?")), sk.value("reason", std::string()));
     for (double mib : lines) {
       fmt::print("\nWithin {} MiB of FLAG buffers (fastest first):\n", mib);
       std::vector<const nlohmann::json*> fit;
@@ -100,7 +157,18 @@ void buffers(BuffersOptions& o) {
                    (*p)["flag_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_flag_f32"]));
     }
   };
-  run_sweep(expand(axes), s);
+  std::vector<SweepPoint> points = expand(axes);
+  // The streamed layers at full resolution, beside the full and reduced buffers.
+  const OptionSpec* layer_buffer = flag.option("layer_buffer");
+  const auto streamed = static_cast<double>(std::find(layer_buffer->choices.begin(), layer_buffer->choices.end(),
+                                                      "streamed") - layer_buffer->choices.begin());
+  for (int rows : o.band_rows) {
+    Axes banded = axes;
+    banded.scales = {1};
+    banded.option_values = {{"layer_buffer", streamed}, {"band_rows", rows}};
+    for (auto& p : expand(banded)) points.push_back(std::move(p));
+  }
+  run_sweep(points, s);
 }
 
 }  // namespace
@@ -117,6 +185,10 @@ void add_buffers_command(CLI::App& app) {
   cmd->add_option("--budget-lines", o->budget_lines_mib, "Memory budgets (MiB) to report and draw")
       ->check(finite_number())
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--band-rows", o->band_rows,
+                  "Streamed layers: output rows per band, one point per value at full resolution (0: the device's "
+                  "auto, flag_gpu.hpp)")
+      ->check(CLI::Range(0, 1 << 16));
   o->sweep.add_to(cmd, 240, 512);
   a.add_quick(cmd, "Small sweep for CI and tests (160x120, N = 9 and 13)",
               {{Axis::resolutions, {"160x120"}}, {Axis::sizes, {"9", "13"}}}, 12);

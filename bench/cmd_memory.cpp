@@ -1,4 +1,5 @@
-// `bokehbench memory`: FLAG's 3D buffer size in the paper's convention and as the driver allocates it.
+// `bokehbench memory`: FLAG's 3D buffer size in the paper's convention and as the driver allocates it,
+// and the streamed layers' ring (layer_buffer = streamed) beside it, one row per --band-rows.
 #include <fmt/format.h>
 
 #include "commands.hpp"
@@ -17,6 +18,7 @@ struct MemoryOptions {
   AxisFlags axes;
   int width_px = 0, height_px = 0, size_n = 0;  // from axes (memory() sets them)
   std::string device, out_path = "results/memory.json";
+  std::vector<int> band_rows = {0};  // streamed rows: band heights (0: the device's auto)
 };
 
 // The figures the paper prints (sections 3.2.4 and 5), for comparison only: 1080p, 41x41, RGBA16F.
@@ -50,7 +52,8 @@ void memory(MemoryOptions& o) {
       fmt::print("{:<17} 1/{:<5} {:>14} {:>14.2f} {:>16.2f} {:>12} {:>12}\n", name, scale,
                  fmt::format("{}x{}x{}", extent.width, extent.height, extent.layers), paper_bytes / kMiB,
                  allocated / kMiB, allocated, printed > 0 ? fmt::format("{} MB", printed) : "-");
-      nlohmann::json row = {{"width_px", o.width_px},
+      nlohmann::json row = {{"layer_buffer", "full"},
+                            {"width_px", o.width_px},
                             {"height_px", o.height_px},
                             {"gather_n", o.size_n},
                             {"layers_full", pattern.layers()},
@@ -66,11 +69,46 @@ void memory(MemoryOptions& o) {
       if (printed > 0) row["paper_printed_mb"] = printed;
       rows.push_back(row);
     }
+    // Streamed: a ring of B + 2 n k rows at full resolution, sized as the GPU driver sizes it.
+    // The full buffer does not depend on k; the ring's rows do (n k): the pattern's own k.
+    const GatherPattern grid = o.axes.patterns().front();
+    for (int requested : o.band_rows) {
+      const FlagBufferExtent full = flag_buffer_extent(o.width_px, o.height_px, grid, 1);
+      const int reach_rows = grid.half() * grid.spacing_px;
+      const std::uint64_t row_bytes =
+          static_cast<std::uint64_t>(full.width) * full.layers * static_cast<std::uint64_t>(bytes_per_texel(precision));
+      const int band = flag_stream_band_rows(requested, ctx.info().is_software(), reach_rows, row_bytes);
+      const int ring = flag_stream_ring_rows(band, reach_rows, full.height);
+      const auto allocated = vk::image_3d_requirement_bytes(ctx, layer_format(precision), full.width, ring, full.layers);
+      const std::uint64_t texels = static_cast<std::uint64_t>(full.width) * ring * full.layers * bytes_per_texel(precision);
+      fmt::print("{:<17} {:<7} {:>14} {:>14} {:>16.2f} {:>12} {:>12}   band {} rows, k = {}, {} bands\n", name,
+                 "stream", fmt::format("{}x{}x{}", full.width, ring, full.layers), "-", allocated / kMiB, allocated,
+                 "-", band, grid.spacing_px, (o.height_px + band - 1) / band);
+      rows.push_back({{"width_px", o.width_px},
+                      {"height_px", o.height_px},
+                      {"gather_n", o.size_n},
+                      {"spacing_px", grid.spacing_px},
+                      {"layers_full", pattern.layers()},
+                      {"precision", name},
+                      {"bytes_per_texel", bytes_per_texel(precision)},
+                      {"scale", 1},
+                      {"layer_buffer", "streamed"},
+                      {"band_rows", band},
+                      {"band_rows_requested", requested},
+                      {"extent", {{"width", full.width}, {"height", ring}, {"layers", full.layers}}},
+                      {"texel_bytes", texels},
+                      // The paper's convention has no fractional layers to drop here: the ring's texels.
+                      {"paper_convention_bytes", texels},
+                      {"paper_convention_mib", texels / kMiB},
+                      {"allocated_bytes", allocated},
+                      {"allocated_mib", allocated / kMiB}});
+    }
   }
   write_results(o.out_path, "bokehbench.memory", run_context(&ctx.info()),
                 {{"convention",
                   "paper_convention_bytes = W*H*ceil(N/2)*bytes_per_texel/scale^3 (fractional layers, as the paper's "
-                  "42 and 5.2 MB); allocated_bytes = vkGetImageMemoryRequirements of the whole-texel 3D image"},
+                  "42 and 5.2 MB); allocated_bytes = vkGetImageMemoryRequirements of the whole-texel 3D image; "
+                  "layer_buffer = streamed rows: a ring of band_rows + 2 n k rows (n = (N - 1) / 2, k = spacing_px)"},
                  {"buffers", rows}});
   fmt::print("wrote {}\n", o.out_path);
 }
@@ -82,12 +120,15 @@ void add_memory_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("memory", "FLAG 3D-buffer size: paper convention and actual allocation");
   AxisFlags& a = o->axes;
   a.resolutions = {"1920x1080"};
-  a.sizes = {"41"};
+  a.sizes = {"41x1"};  // the paper's 41x41 gather at full resolution: k = 1 (the ring's rows depend on k)
   a.precisions = {"f16", "f32"};  // scales: every one FLAG has
   a.add_to(cmd, {Axis::precisions, Axis::scales}, {Axis::resolutions, Axis::sizes});
   const Method& flag = find_method("flag");
   a.option(Axis::precisions)->check(CLI::IsMember(flag.precisions));
   a.option(Axis::scales)->check(CLI::IsMember(flag.buffer_scales));
+  cmd->add_option("--band-rows", o->band_rows,
+                  "Streamed layers: output rows per band, one row of the table per value (0: the device's auto)")
+      ->check(CLI::Range(0, 1 << 16));
   cmd->add_option("--device", o->device, "Vulkan device index or name part");
   cmd->add_option("--out", o->out_path, "JSON output path");
   cmd->callback([o] { memory(*o); });

@@ -4,7 +4,8 @@
 usage: plot_buffers.py BUFFERS_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
 
 Top row, one panel per resolution: RMSE against the full-resolution f32 FLAG result vs the 3D
-buffer's size (driver's MiB, log-log), one marker per precision, one colour per buffer scale,
+buffer's size (driver's MiB, log-log), one marker per precision, one colour per buffer scale
+(purple: the streamed layers, full resolution through a ring of rows),
 filled for the largest gather size N and hollow for smaller ones; dotted verticals are the memory
 budgets (64 and 16 MiB by default). Exact results (RMSE 0) sit on the bottom edge, marked "exact".
 Configurations skipped for the memory budget appear as grey x's on the bottom edge at their size.
@@ -23,6 +24,15 @@ import bokehplot
 import matplotlib.pyplot as plt
 
 SCALE_COLOURS = {1: "#1f77b4", 2: "#ff7f0e", 4: "#2ca02c"}
+STREAMED_COLOUR = "#9467bd"  # layer_buffer = streamed: full resolution through a ring of rows
+
+
+def streamed(p):
+    return p.get("options", {}).get("layer_buffer") == "streamed"
+
+
+def colour_of(p):
+    return STREAMED_COLOUR if streamed(p) else SCALE_COLOURS.get(p["buffer_scale"], "k")
 
 
 def mib(p):
@@ -64,7 +74,7 @@ def main(doc, prefix):
         ax = fig.add_subplot(top[0, i])
         for p in (p for p in points if res_key(p) == res):
             err = rmse(p)
-            colour = SCALE_COLOURS.get(p["buffer_scale"], "k")
+            colour = colour_of(p)
             filled = p["N"] == largest_n
             ax.scatter(mib(p), err if err > 0 else floor, marker=MARKERS.get(p["precision"], "o"),
                        s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2, zorder=3)
@@ -91,6 +101,8 @@ def main(doc, prefix):
                if name in precisions]
     handles += [plt.Line2D([], [], ls="", marker="o", color=c, label=f"scale 1/{s}") for s, c in SCALE_COLOURS.items()
                 if s in scales]
+    if any(streamed(p) for p in points):
+        handles.append(plt.Line2D([], [], ls="", marker="o", color=STREAMED_COLOUR, label="streamed (ring of rows)"))
     handles += [plt.Line2D([], [], ls="", marker="o", markerfacecolor="none", color="0.2", label="N < " + str(largest_n)),
                 plt.Line2D([], [], ls="", marker="x", color="0.6", label="skipped (over --max-buffer-mb)")]
     fig.axes[0].legend(handles=handles, fontsize=7, loc="lower left")
@@ -100,7 +112,8 @@ def main(doc, prefix):
     big = with_data[-1] if with_data else resolutions[-1]
     ax = fig.add_subplot(bottom[0, 0])
     def series(precision, scale):
-        return sorted((p for p in points if res_key(p) == big and p["precision"] == precision and p["buffer_scale"] == scale),
+        return sorted((p for p in points if res_key(p) == big and p["precision"] == precision and p["buffer_scale"] == scale
+                       and not streamed(p)),
                       key=lambda p: p["N"])
     for precision in precisions:
         pts = series(precision, 1)
@@ -123,7 +136,7 @@ def main(doc, prefix):
     ax = fig.add_subplot(bottom[0, 1])
     exact_points = [p for p in points if res_key(p) == big]
     for p in exact_points:
-        colour = SCALE_COLOURS.get(p["buffer_scale"], "k")
+        colour = colour_of(p)
         filled = p["N"] == largest_n
         ax.scatter(mib(p), rmse(p, "vs_energy_sum"), marker=MARKERS.get(p["precision"], "o"),
                    s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
@@ -143,7 +156,7 @@ def main(doc, prefix):
 
     ax = fig.add_subplot(bottom[0, 2])
     for p in (p for p in points if res_key(p) == big):
-        colour = SCALE_COLOURS.get(p["buffer_scale"], "k")
+        colour = colour_of(p)
         filled = p["N"] == largest_n
         ax.scatter(mib(p), p["flag_passes_ms"],
                    marker=MARKERS.get(p["precision"], "o"),

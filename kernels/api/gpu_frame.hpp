@@ -22,6 +22,7 @@ namespace bokeh::gpu {
 struct PassParams {
   std::int32_t width_px, height_px, half_n, spacing_px;
   float coc_scale_px, focus_m, max_radius_px;
+  std::int32_t band_y0_px = 0, band_y1_px = 0;  // FLAG streamed: the rows of one band's dispatch
 };
 
 class GpuFrame {

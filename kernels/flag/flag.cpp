@@ -244,24 +244,79 @@ int strip_columns(int layers, int height) {
   return std::clamp(static_cast<int>(floats) / simd::kWidth * simd::kWidth, simd::kWidth, 64);
 }
 
+// reach_of[d] = min(isqrt(d), n): a column's reach is reach_of[index - i^2] (reach_layer).
+std::vector<std::int16_t> reach_table(int n, int max_index) {
+  std::vector<std::int16_t> reach_of(static_cast<std::size_t>(max_index) + 1);
+  for (int d = 0; d <= max_index; ++d) reach_of[static_cast<std::size_t>(d)] = static_cast<std::int16_t>(reach_layer(d, 0, n));
+  return reach_of;
+}
+
+// The horizontal pass for row y, columns [x0, x1), into row_of(z, c)[x - x0], rounded as the precision
+// stores it: each sample's reach from its disc index (disc_row: the row's indices, computed once per
+// pixel, not per tap, and equal to disc_reach_layer), bins in sample order, accumulated outermost
+// first (f16 rounded in bulk: half_float.hpp). `bins`: (n + 1) x 3 floats of scratch.
+template <class RowOf>
+inline void flag_row_layers(const Image& packed, const std::int32_t* disc_row, const std::int16_t* reach_of, int y,
+                            int x0, int x1, int n, int k, LayerPrecision precision, float* bins, RowOf&& row_of) {
+  const int w = packed.width;
+  for (int x = x0; x < x1; ++x) {
+    std::fill(bins, bins + static_cast<std::size_t>(n + 1) * 3, 0.0f);
+    const int i_lo = std::max(-n, -(x / k)), i_hi = std::min(n, (w - 1 - x) / k);
+    for (int i = i_lo; i <= i_hi; ++i) {
+      const int sx = x + i * k, d = disc_row[sx] - i * i;
+      if (d < 0) continue;
+      const float* src = packed.px(sx, y);
+      float* bin = bins + static_cast<std::size_t>(reach_of[static_cast<std::size_t>(d)]) * 3;
+      bin[0] += src[0], bin[1] += src[1], bin[2] += src[2];
+    }
+    float running[3] = {0, 0, 0};
+    for (int z = n; z >= 0; --z)
+      for (int c = 0; c < 3; ++c) row_of(z, c)[x - x0] = running[c] += bins[static_cast<std::size_t>(z) * 3 + c];
+  }
+  const auto row_values = static_cast<std::size_t>(x1 - x0);
+  if (precision == LayerPrecision::f16) {
+    for (int z = 0; z <= n; ++z)
+      for (int c = 0; c < 3; ++c) round_to_half(row_of(z, c), row_values);
+  } else if (precision != LayerPrecision::f32) {
+    for (int z = 0; z <= n; ++z)
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t x = 0; x < row_values; ++x) row_of(z, c)[x] = round_layer_value(row_of(z, c)[x], precision, c);
+  }
+}
+
+// The vertical pass for row y, columns [x0, x1), kWidth columns at a time: layer |j| of rows y + j k,
+// j = -n .. n, from row_of(z, c, sy) (column x0 first). Its rows must hold a whole number of vectors
+// past x0: lanes past x1 read whatever is there and are dropped.
+template <class RowOf>
+inline void flag_vertical_row(Image& out, int y, int x0, int x1, int n, int k, RowOf&& row_of) {
+  const int h = out.height;
+  for (int x = x0; x < x1; x += simd::kWidth) {
+    simd::f32v sum[3] = {};
+    for (int j = -n; j <= n; ++j) {
+      const int sy = y + j * k;
+      if (sy < 0 || sy >= h) continue;
+      for (int c = 0; c < 3; ++c) sum[c] += simd::load(row_of(j < 0 ? -j : j, c, sy) + (x - x0));
+    }
+    for (int l = 0; l < simd::kWidth && x + l < x1; ++l) {
+      float* o = out.px(x + l, y);
+      o[0] = sum[0][l], o[1] = sum[1][l], o[2] = sum[2][l];
+    }
+  }
+}
+
 }  // namespace
 
 // flag_horizontal + flag_vertical, strip by strip. The horizontal pass writes a column's layers
 // from that row's input alone, and the vertical pass reads only that column's layers, so a strip of
 // columns is computed whole (no halo) while its layers fit in a buffer reused from frame to frame.
-// Per pixel the same float operations in the same order as the reference:
-//   horizontal: each sample's reach from its disc index (computed once per pixel, not per tap, and
-//     equal to disc_reach_layer), bins in sample order, accumulated outermost first, then rounded
-//     as the precision stores it (f16 in bulk: half_float.hpp);
-//   vertical: layer |j| of rows y + j k for j = -n .. n, vectorised across adjacent columns.
+// Per pixel the same float operations in the same order as the reference (flag_row_layers,
+// flag_vertical_row), vectorised across adjacent columns in the vertical pass.
 Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
   if (is_bracketed(precision)) return flag_blur_reference(packed, p, precision, threads);  // brackets span rows
   check_layer_input(packed, precision);
   const int w = packed.width, h = packed.height, n = p.half(), k = p.spacing_px, layers = p.layers();
   const int max_index = 2 * n * n;
-  // reach_of[d] = min(isqrt(d), n): a column's reach is reach_of[index - i^2] (reach_layer).
-  std::vector<std::int16_t> reach_of(static_cast<std::size_t>(max_index) + 1);
-  for (int d = 0; d <= max_index; ++d) reach_of[static_cast<std::size_t>(d)] = static_cast<std::int16_t>(reach_layer(d, 0, n));
+  const std::vector<std::int16_t> reach_of = reach_table(n, max_index);
   Scratch<std::int32_t> index_scratch(packed.pixel_count());
   std::int32_t* const disc = index_scratch.data();
   parallel_rows(h, threads, [&](int y) {
@@ -287,72 +342,78 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
     std::vector<float> bins(static_cast<std::size_t>(layers) * 3);
     for (int s = worker; s < strips; s += workers) {
       const int x0 = s * strip, x1 = std::min(w, x0 + strip);
-      for (int y = 0; y < h; ++y) {
-        const std::int32_t* disc_row = disc + static_cast<std::size_t>(y) * w;
-        for (int x = x0; x < x1; ++x) {
-          std::fill(bins.begin(), bins.end(), 0.0f);
-          const int i_lo = std::max(-n, -(x / k)), i_hi = std::min(n, (w - 1 - x) / k);
-          for (int i = i_lo; i <= i_hi; ++i) {
-            const int sx = x + i * k, d = disc_row[sx] - i * i;
-            if (d < 0) continue;
-            const float* src = packed.px(sx, y);
-            float* bin = bins.data() + static_cast<std::size_t>(reach_of[static_cast<std::size_t>(d)]) * 3;
-            bin[0] += src[0], bin[1] += src[1], bin[2] += src[2];
-          }
-          float running[3] = {0, 0, 0};
-          for (int z = n; z >= 0; --z)
-            for (int c = 0; c < 3; ++c) at(z, c, y)[x - x0] = running[c] += bins[static_cast<std::size_t>(z) * 3 + c];
-        }
-        const auto row_values = static_cast<std::size_t>(x1 - x0);
-        if (precision == LayerPrecision::f16) {
-          for (int z = 0; z <= n; ++z)
-            for (int c = 0; c < 3; ++c) round_to_half(at(z, c, y), row_values);
-        } else if (precision != LayerPrecision::f32) {
-          for (int z = 0; z <= n; ++z)
-            for (int c = 0; c < 3; ++c)
-              for (std::size_t x = 0; x < row_values; ++x) at(z, c, y)[x] = round_layer_value(at(z, c, y)[x], precision, c);
-        }
-      }
-      // Vertical pass over the strip, kWidth columns at a time. A buffer row is `strip` wide, a
-      // multiple of kWidth: lanes past x1 read whatever is there and are dropped.
       for (int y = 0; y < h; ++y)
-        for (int x = x0; x < x1; x += simd::kWidth) {
-          simd::f32v sum[3] = {};
-          for (int j = -n; j <= n; ++j) {
-            const int sy = y + j * k;
-            if (sy < 0 || sy >= h) continue;
-            for (int c = 0; c < 3; ++c) sum[c] += simd::load(at(j < 0 ? -j : j, c, sy) + (x - x0));
-          }
-          for (int l = 0; l < simd::kWidth && x + l < x1; ++l) {
-            float* o = out.px(x + l, y);
-            o[0] = sum[0][l], o[1] = sum[1][l], o[2] = sum[2][l];
-          }
-        }
+        flag_row_layers(packed, disc + static_cast<std::size_t>(y) * w, reach_of.data(), y, x0, x1, n, k, precision,
+                        bins.data(), [&](int z, int c) { return at(z, c, y); });
+      for (int y = 0; y < h; ++y) flag_vertical_row(out, y, x0, x1, n, k, at);  // rows `strip` wide: whole vectors
     }
   });
   return out;
 }
 
-Image flag_blur_in_strips(const Image& packed, const GatherPattern& p, LayerPrecision precision, int strip_px,
-                          int threads) {
+namespace {
+
+// Columns of a ring row: whole vectors, for the vertical pass's loads past the frame's last column.
+int ring_stride(int width_px) { return (width_px + simd::kWidth - 1) / simd::kWidth * simd::kWidth; }
+
+int ring_rows_of(int height_px, const GatherPattern& p, int band_rows) {
+  return static_cast<int>(std::min<std::int64_t>(height_px, static_cast<std::int64_t>(band_rows) + 2 * p.half() * p.spacing_px));
+}
+
+}  // namespace
+
+std::uint64_t flag_streamed_cpu_bytes(int width_px, int height_px, const GatherPattern& p, int band_rows,
+                                      int threads) {
+  const auto ring = static_cast<std::uint64_t>(ring_rows_of(height_px, p, std::max(band_rows, 1))) * p.layers() * 3 *
+                    ring_stride(width_px) * sizeof(float);
+  // Per worker: the bins (ceil(N/2) x 3 floats) and a row of disc indices.
+  const auto scratch = static_cast<std::uint64_t>(std::max(threads, 1)) * (p.layers() * 12ull + width_px * 4ull);
+  return ring + scratch;
+}
+
+// The streamed order (flag_gpu.hpp, layer_buffer = streamed): bands of `band_rows` output rows, the
+// horizontal pass filling a ring of B + 2 n k rows up to each band's last row + n k, then the
+// vertical pass over the band. Per pixel the operations of flag_blur (the same helpers), so the
+// same result bit for bit; rows run in parallel within each pass of a band.
+Image flag_blur_streamed(const Image& packed, const GatherPattern& p, LayerPrecision precision, int band_rows,
+                         int threads) {
   if (is_bracketed(precision))
-    throw std::invalid_argument(std::string("flag_blur_in_strips: ") + to_string(precision) +
-                                " brackets whole rows; use flag_blur");
-  if (strip_px < 1) throw std::invalid_argument("flag_blur_in_strips: strip width must be >= 1");
-  const int halo = p.half() * p.spacing_px;
-  Image out(packed.width, packed.height, 3);
-  for (int x0 = 0; x0 < packed.width; x0 += strip_px) {
-    const int x1 = std::min(packed.width, x0 + strip_px);
-    const int cx0 = std::max(0, x0 - halo), cx1 = std::min(packed.width, x1 + halo);
-    // Every source column the strip's pixels gather from lies in [cx0, cx1): the crop's result is
-    // the frame's, sample for sample.
-    Image crop(cx1 - cx0, packed.height, packed.channels);
-    for (int y = 0; y < packed.height; ++y)
-      std::copy(packed.px(cx0, y), packed.px(cx0, y) + static_cast<std::size_t>(crop.width) * packed.channels,
-                crop.px(0, y));
-    const Image blurred = flag_blur(crop, p, precision, threads);
-    for (int y = 0; y < packed.height; ++y)
-      std::copy(blurred.px(x0 - cx0, y), blurred.px(x1 - cx0, y), out.px(x0, y));
+    throw std::invalid_argument(std::string("flag_blur_streamed: ") + to_string(precision) +
+                                " is bracketed; the CPU streams the per-value precisions (f32, f16, r11g11b10f)");
+  if (band_rows < 1)
+    throw std::invalid_argument(fmt::format("flag_blur_streamed: band_rows {} must be >= 1", band_rows));
+  check_layer_input(packed, precision);
+  const int w = packed.width, h = packed.height, n = p.half(), k = p.spacing_px, layers = p.layers();
+  const int max_index = 2 * n * n, reach_rows = n * k;
+  const int ring_rows = ring_rows_of(h, p, band_rows), stride = ring_stride(w);
+  const std::vector<std::int16_t> reach_of = reach_table(n, max_index);
+  Scratch<float> ring_scratch(static_cast<std::size_t>(ring_rows) * layers * 3 * stride);
+  float* const ring = ring_scratch.data();
+  // ring[((row mod ring_rows) * layers + z) * 3 + c) * stride + x]: row y of layers in ring row y mod R.
+  auto at = [&](int z, int c, int y) {
+    return ring + ((static_cast<std::size_t>(y % ring_rows) * layers + z) * 3 + c) * stride;
+  };
+  const int workers = std::max(1, threads);
+  std::vector<std::vector<float>> bins(static_cast<std::size_t>(workers), std::vector<float>(static_cast<std::size_t>(layers) * 3));
+  std::vector<std::vector<std::int32_t>> disc(static_cast<std::size_t>(workers), std::vector<std::int32_t>(static_cast<std::size_t>(w)));
+  Image out(w, h, 3);
+  int written = 0;  // rows of layers in the ring so far
+  for (int y0 = 0; y0 < h; y0 += band_rows) {
+    const int y1 = std::min(h, y0 + band_rows), needed = std::min(h, y1 + reach_rows), first = written;
+    // Each worker takes every workers-th row; its scratch is its own.
+    parallel_rows(workers, workers, [&](int worker) {
+      std::int32_t* const disc_row = disc[static_cast<std::size_t>(worker)].data();
+      for (int y = first + worker; y < needed; y += workers) {
+        for (int x = 0; x < w; ++x) {
+          const float r = packed.px(x, y)[3];
+          disc_row[x] = disc_index(r * r, k, max_index);
+        }
+        flag_row_layers(packed, disc_row, reach_of.data(), y, 0, w, n, k, precision,
+                        bins[static_cast<std::size_t>(worker)].data(), [&](int z, int c) { return at(z, c, y); });
+      }
+    });
+    written = std::max(written, needed);
+    parallel_rows(y1 - y0, workers, [&](int i) { flag_vertical_row(out, y0 + i, 0, w, n, k, at); });
   }
   return out;
 }

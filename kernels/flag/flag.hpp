@@ -7,6 +7,7 @@
 // contribution of row Y to the pixel dy rows above equals its contribution dy rows below; the buffer
 // stores one layer per |dy| = z k, ceil(N/2) = (N + 1) / 2 layers instead of N, and the vertical pass
 // reads layer |j| for both row y + j k and row y - j k. There is nothing further to halve for discs.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -94,11 +95,18 @@ Image flag_blur(const Image& packed, const GatherPattern& pattern, LayerPrecisio
 Image flag_blur_reference(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                           int threads = default_cpu_threads());
 
-// flag_blur computed on vertical strips of `strip_px` columns (each with the horizontal pass's halo
-// of k (N - 1) / 2 columns), so the 3D buffer held at once is a strip's, not the frame's. Bit for bit
-// flag_blur's result for the per-value precisions; throws for bracketed ones (their offsets and scales
-// span whole rows). This is how `bokehbench buffers` computes its 4K f32 reference on the CPU.
-Image flag_blur_in_strips(const Image& packed, const GatherPattern& pattern, LayerPrecision precision, int strip_px,
-                          int threads = default_cpu_threads());
+// flag_blur streamed through a ring of rows, as the GPU's layer_buffer = streamed runs it
+// (kernels/flag/flag_gpu.hpp): bands of `band_rows` output rows; for each, the horizontal pass fills
+// the ring (B + 2 n k rows, at most the height) up to the band's last row + n k, then the vertical
+// pass sums the band. Bit for bit flag_blur's result for the per-value precisions (the same per-pixel
+// operations); throws std::invalid_argument for bracketed ones and for band_rows < 1. The one way
+// the CPU bounds FLAG's memory: the method's CPU reference streams past 256 MiB of layers and for
+// layer_buffer = streamed, and `bokehbench buffers` computes its 4K f32 reference so.
+Image flag_blur_streamed(const Image& packed, const GatherPattern& pattern, LayerPrecision precision, int band_rows,
+                         int threads = default_cpu_threads());
+// Bytes flag_blur_streamed allocates beyond its input and output: the ring (f32, rows padded to whole
+// vectors) and each thread's scratch.
+std::uint64_t flag_streamed_cpu_bytes(int width_px, int height_px, const GatherPattern& pattern, int band_rows,
+                                      int threads);
 
 }  // namespace bokeh

@@ -17,6 +17,8 @@ FlagConfig flag_config(const FilterOptions& options) {
   c.horizontal_bins = options.choice<FlagHorizontalBins>("horizontal_bins");
   c.adaptive = adaptive_on(options);
   c.adaptive_tile_px = adaptive_tile_px(options);
+  c.streamed = options.choice<FlagLayerBuffer>("layer_buffer") == FlagLayerBuffer::streamed;
+  c.band_rows = options.integer("band_rows");
   return c;
 }
 

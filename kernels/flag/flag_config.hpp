@@ -18,6 +18,8 @@ struct FlagConfig {
   FlagHorizontalBins horizontal_bins = FlagHorizontalBins::automatic;
   bool adaptive = false;                      // adaptive = on (coc_tiles_gpu.hpp)
   int adaptive_tile_px = 0;                   // adaptive: the tile-max CoC map's tile side, px of FLAG's grid
+  bool streamed = false;                      // layer_buffer = streamed: a ring of rows (flag_gpu.hpp)
+  int band_rows = 0;                          // streamed: output rows per band; 0: auto (flag_stream_band_rows)
 };
 
 // Throws std::invalid_argument for an unknown precision, std::logic_error for a missing option.

@@ -26,6 +26,7 @@
 // frame then computes the tile map (tile_max, tile_reach, tile_layers) before the FLAG passes, which
 // bound their row samples, the layers they write and the rows they sum by it; tiles nothing blurred
 // reaches pass their input through (shaders/flag/horizontal.comp, vertical.comp).
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -108,6 +109,33 @@ FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::De
   return layers <= kSoftwareMaskedFirstLayers ? FlagHorizontalBins::masked : FlagHorizontalBins::scan;
 }
 
+const std::vector<std::string>& flag_layer_buffers() {
+  static const std::vector<std::string> buffers = {"full", "streamed"};
+  return buffers;
+}
+
+// Auto band height: the ring within a byte budget per device kind, never under a floor of rows.
+// lavapipe runs each dispatch to completion across its threads, so every band costs two pipeline
+// launches and two thread-pool barriers: it wants few, tall bands; 16 MiB is the goal at
+// 1080p / 41x41 f16 (B = 12 rows, 90 bands). A GPU wants the ring to stay in its L2 cache (tens of
+// MiB) while a band still fills the device: 32 MiB (B = 64 rows at 1080p / 41x41 f16), a choice not
+// yet measured on a GPU. The floor keeps large patterns (4K / 81x81 f16: a 1.3 MB row, 2 n k = 80
+// rows already over either budget) from a dispatch pair per row. `memory --band-rows` lists the
+// rings, `buffers --band-rows` times them interleaved (README, "Streamed FLAG layers").
+constexpr std::uint64_t kFlagStreamBudgetSoftware = 16ull << 20, kFlagStreamBudgetGpu = 32ull << 20;
+constexpr int kFlagStreamMinBand = 8;
+
+int flag_stream_band_rows(int requested, bool software_device, int reach_rows, std::uint64_t row_bytes) {
+  if (requested > 0) return requested;
+  const std::uint64_t budget = software_device ? kFlagStreamBudgetSoftware : kFlagStreamBudgetGpu;
+  const auto rows = static_cast<std::int64_t>(budget / std::max<std::uint64_t>(row_bytes, 1));
+  return static_cast<int>(std::clamp<std::int64_t>(rows - 2 * reach_rows, kFlagStreamMinBand, 1 << 16));
+}
+
+int flag_stream_ring_rows(int band_rows, int reach_rows, int height) {
+  return static_cast<int>(std::min<std::int64_t>(height, static_cast<std::int64_t>(band_rows) + 2 * reach_rows));
+}
+
 namespace {
 
 void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, bool bracketed) {
@@ -152,6 +180,7 @@ class Flag final : public gpu::GpuFilter {
         outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), pattern_.layers())),
         bins_(flag_horizontal_binning(config.horizontal_bins, frame.ctx.info(), pattern_.layers())),
         tile_px_(config.adaptive ? config.adaptive_tile_px : 0),
+        streamed_(config.streamed),
         layer_count_(pattern_.layers()) {
     check_colour(frame, config.precision);
     const vk::Buffer* flag_input = &frame.packed;
@@ -209,11 +238,20 @@ class Flag final : public gpu::GpuFilter {
     std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px,
                                                       outputs_,     tile_px_,      bins_ == FlagHorizontalBins::masked,
                                                       kFlagScanSegment};
-    std::vector<std::int32_t> vertical_constants = {layer_count_};
+    std::vector<std::int32_t> vertical_constants = {layer_count_, tile_px_};
+    // Streamed: the ring's rows (constant_id 7, LAYER_ROWS in shaders/flag/layer_rows.glsl; 0: full).
+    if (config.streamed && extent_y > 1) {
+      const int reach_rows = (layer_count_ - 1) * pattern_.spacing_px;  // the rows a vertical pass reads away
+      const std::uint64_t row_bytes = static_cast<std::uint64_t>(extent_x) * layer_count_ * bytes_per_texel(config.precision);
+      band_rows_ = flag_stream_band_rows(config.band_rows, frame.ctx.info().is_software(), reach_rows, row_bytes);
+      extent_y = static_cast<std::uint32_t>(flag_stream_ring_rows(band_rows_, reach_rows, static_cast<int>(extent_y)));
+      horizontal_constants.push_back(static_cast<std::int32_t>(extent_y));
+      vertical_constants.resize(7, 0);
+      vertical_constants.push_back(static_cast<std::int32_t>(extent_y));
+    }
     std::vector<VkDescriptorType> horizontal_bindings = {kBuffer, kImage}, vertical_bindings = {kImage, kBuffer};
     if (bracketed) horizontal_bindings.push_back(kBuffer), vertical_bindings.push_back(kBuffer);
     if (tile_px_ > 0) {
-      vertical_constants.push_back(tile_px_);
       horizontal_bindings.push_back(kBuffer);                 // the tile map
       vertical_bindings.insert(vertical_bindings.end(), {kBuffer, kBuffer});  // the tile map, FLAG's input
     }
@@ -280,17 +318,30 @@ class Flag final : public gpu::GpuFilter {
       bracket_->dispatch(cmd, &low, ceil_div(lw, kBracketChunk), lh);
       timer.end_pass(cmd, "bracket");
     }
-    const std::uint32_t k = static_cast<std::uint32_t>(pattern_.spacing_px);
-    if (bins_ == FlagHorizontalBins::scan) {
-      // Per row: k phases x ceil(ceil(W / k) / SEGMENT) segments x ceil(layers / 8) workgroups of 8.
-      const std::uint32_t segments = ceil_div(ceil_div(lw, k), static_cast<std::uint32_t>(kFlagScanSegment));
-      horizontal_->dispatch(cmd, &low, segments * k * ceil_div(static_cast<std::uint32_t>(layer_count_), 8u) * 8u, lh);
+    if (band_rows_ > 0) {
+      // Streamed: per band, the horizontal pass fills the ring up to the band's last row + n k (the
+      // rows not yet written), then the vertical pass sums the band; dispatch() ends each with a
+      // barrier, so a band's rows are written before they are read and read before the ring wraps
+      // onto them. One timestamp for the whole: per-band stamps would outnumber the query pool.
+      const int reach_rows = (layer_count_ - 1) * pattern_.spacing_px, h = low.height_px;
+      int written = 0;  // rows of layers written so far
+      for (int y0 = 0; y0 < h; y0 += band_rows_) {
+        const int y1 = std::min(h, y0 + band_rows_), needed = std::min(h, y1 + reach_rows);
+        if (needed > written) record_horizontal(cmd, low, written, needed);
+        written = std::max(written, needed);
+        PassParams band = low;
+        band.band_y0_px = y0, band.band_y1_px = y1;
+        vertical_->dispatch(cmd, &band, lw, static_cast<std::uint32_t>(y1 - y0));
+      }
+      timer.end_pass(cmd, "streamed");
     } else {
-      horizontal_->dispatch(cmd, &low, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, lh);
+      // Streamed without a ring (adaptive, a scene with no blur: no layer at all) stamps as streamed.
+      record_horizontal(cmd, low, 0, low.height_px);
+      if (!streamed_) timer.end_pass(cmd, "horizontal");
+      low.band_y0_px = 0, low.band_y1_px = low.height_px;
+      vertical_->dispatch(cmd, &low, lw, lh);
+      timer.end_pass(cmd, streamed_ ? "streamed" : "vertical");
     }
-    timer.end_pass(cmd, "horizontal");
-    vertical_->dispatch(cmd, &low, lw, lh);
-    timer.end_pass(cmd, "vertical");
     if (upsample_) {
       upsample_->dispatch(cmd, &full, frame_.width(), frame_.height());
       timer.end_pass(cmd, "upsample");
@@ -318,6 +369,22 @@ class Flag final : public gpu::GpuFilter {
   }
 
  private:
+  // The horizontal pass over rows [y0, y1) of FLAG's grid (`low`: its parameters).
+  void record_horizontal(VkCommandBuffer cmd, const PassParams& low, int y0, int y1) const {
+    PassParams band = low;
+    band.band_y0_px = y0, band.band_y1_px = y1;
+    const auto lw = static_cast<std::uint32_t>(low.width_px), rows = static_cast<std::uint32_t>(y1 - y0);
+    const std::uint32_t k = static_cast<std::uint32_t>(pattern_.spacing_px);
+    if (bins_ == FlagHorizontalBins::scan) {
+      // Per row: k phases x ceil(ceil(W / k) / SEGMENT) segments x ceil(layers / 8) workgroups of 8.
+      const std::uint32_t segments = ceil_div(ceil_div(lw, k), static_cast<std::uint32_t>(kFlagScanSegment));
+      horizontal_->dispatch(cmd, &band, segments * k * ceil_div(static_cast<std::uint32_t>(layer_count_), 8u) * 8u,
+                            rows);
+    } else {
+      horizontal_->dispatch(cmd, &band, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, rows);
+    }
+  }
+
   // FLAG's grid (full or reduced resolution) for the frame region `full`, with its pattern's n.
   PassParams grid_params(const PassParams& full) const {
     PassParams low = full;
@@ -335,8 +402,10 @@ class Flag final : public gpu::GpuFilter {
   std::int32_t outputs_;   // pixels per invocation of the horizontal pass
   FlagHorizontalBins bins_;  // the horizontal pass's binning as run (never automatic)
   std::int32_t tile_px_;   // adaptive: the tile map's tile size; 0: worst case
+  bool streamed_;          // layer_buffer = streamed
   std::int32_t layer_count_;  // allocated: the pattern's ceil(N/2), or (adaptive) what the scene needs
   int scene_max_index_ = -1;  // adaptive: the scene's largest disc index when prepared
+  int band_rows_ = 0;  // streamed: output rows per band; 0: the full buffer
   std::optional<gpu::CocTilesGpu> tiles_;
   std::optional<vk::StorageImage3D> layers_;
   std::optional<vk::ComputePipeline> horizontal_, vertical_, tile_layers_;

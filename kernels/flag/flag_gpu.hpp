@@ -40,6 +40,24 @@ enum class FlagHorizontalBins { automatic, indexed, masked, scan };
 // The binning the pass runs: `bins` as chosen, auto's choice by device and layers.
 FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 
+// Where the horizontal pass leaves the layers for the vertical pass, the method's option
+// "layer_buffer". "full" (the default and the reference): the paper's 3D buffer, one row of layers
+// per row of FLAG's grid. "streamed": a ring of rows. The vertical pass at row y reads only rows
+// y - n k .. y + n k, so the frame is cut into bands of B output rows; for each band the horizontal
+// pass writes the rows not yet written up to the band's last row + n k, then the vertical pass sums
+// the band, each a dispatch in the same command buffer with a barrier between. Row y of layers lives
+// in row y mod (B + 2 n k) of the ring, which never overwrites a row a later band still reads. The
+// same layer values in the same order of additions: the full buffer's image bit for bit (every
+// precision), in W x min(H, B + 2 n k) x ceil(N/2) texels instead of W x H x ceil(N/2).
+const std::vector<std::string>& flag_layer_buffers();  // "full", "streamed"
+enum class FlagLayerBuffer { full, streamed };
+// Output rows per band as run: `requested` (> 0, the option band_rows), or auto's (0): the largest
+// band whose ring fits kFlagStreamBudgetBytes of the device kind, and at least kFlagStreamMinBand
+// rows. `reach_rows` = n k of FLAG's grid, `row_bytes` = one row of layers (width x layers x texel).
+int flag_stream_band_rows(int requested, bool software_device, int reach_rows, std::uint64_t row_bytes);
+// Rows of the ring: B + 2 n k, at most the grid's height (then it is the full buffer's extent).
+int flag_stream_ring_rows(int band_rows, int reach_rows, int height);
+
 // Parses `options` once (flag_config) and makes the filter.
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
 

@@ -41,16 +41,31 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
                     static_cast<double>(flag_bracket_buffer_bytes(ceil_div(h, s), low.layers()))});
   // Every binning reads each pixel's N row samples (scan: as interval ends, loaded once per 8 layers
   // of a segment, the repeats from cache) and writes its layers once.
-  work.push_back({"horizontal", lows * low.size_n, lows * 16, layer_bytes});
-  work.push_back({"vertical", lows * low.size_n, layer_bytes, lows * 16});
+  if (c.streamed) {
+    // Both passes band by band under one timestamp: the same taps and bytes, the layers through the
+    // ring (which a GPU's L2 cache can hold) instead of a frame-sized buffer.
+    work.push_back({"streamed", 2 * lows * low.size_n, lows * 16 + layer_bytes, layer_bytes + lows * 16});
+  } else {
+    work.push_back({"horizontal", lows * low.size_n, lows * 16, layer_bytes});
+    work.push_back({"vertical", lows * low.size_n, layer_bytes, lows * 16});
+  }
   if (s > 1) work.push_back({"upsample", full * 4, full * 32 + lows * 16, full * 16});
   return work;
 }
 
 MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
-  const FlagBufferExtent e = flag_buffer_extent(w, h, c.pattern, c.buffer_scale);
+  FlagBufferExtent e = flag_buffer_extent(w, h, c.pattern, c.buffer_scale);
   MemoryUse use;
-  const std::uint64_t texels = flag_texel_bytes(w, h, c.pattern, c.precision, c.buffer_scale);
+  int band_rows = 0;
+  if (c.streamed) {
+    // The ring as the GPU driver sizes it (flag_gpu.cpp), for the worst case's layers; no device:
+    // lavapipe's choice.
+    const int reach_rows = (e.layers - 1) * reduced_pattern(c.pattern, c.buffer_scale).spacing_px;
+    const std::uint64_t row_bytes = static_cast<std::uint64_t>(e.width) * e.layers * bytes_per_texel(c.precision);
+    band_rows = flag_stream_band_rows(c.band_rows, ctx ? ctx->info().is_software() : true, reach_rows, row_bytes);
+    e.height = flag_stream_ring_rows(band_rows, reach_rows, e.height);
+  }
+  const std::uint64_t texels = e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
   std::uint64_t layers = texels;
   if (ctx) {
     layers = vk::image_3d_requirement_bytes(*ctx, layer_format(c.precision), e.width, e.height, e.layers);
@@ -75,22 +90,25 @@ MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
                  {"texel_bytes", texels},
                  {"paper_convention_bytes", paper},
                  {"other_bytes", other}};
+  if (c.streamed) use.details["streamed"] = {{"band_rows", band_rows}, {"ring_rows", e.height}};
   return use;
 }
 
-// The CPU reference holds its 3D buffer whole up to this size; beyond it, it runs in vertical strips
-// (flag_blur_in_strips: the same result bit for bit) whose buffers stay near it, so a 8192^2 frame
-// needs ~0.3 GiB instead of 16 GiB. Bracketed precisions bracket whole rows and stay whole.
+// The CPU reference holds its 3D buffer whole up to this size; beyond it, it streams its layers
+// through a ring of rows (flag_blur_streamed: the same result bit for bit) of about this size, so a
+// 8192^2 frame needs ~0.25 GiB instead of 16 GiB. layer_buffer = streamed streams the same way, with
+// the GPU's band (lavapipe's auto when band_rows is 0). Bracketed precisions bracket whole rows and
+// reduced buffers run at low resolution: both stay whole.
 constexpr std::uint64_t kCpuWholeBufferBytes = 256ull << 20;
 
-// Strip width in px for the CPU reference, 0 for the whole frame at once.
-int cpu_strip_px(const FlagConfig& c, int w, int h) {
+// Output rows per band of the CPU reference, 0 for the whole frame at once.
+int cpu_band_rows(const FlagConfig& c, int w, int h) {
   if (c.buffer_scale != 1 || is_bracketed(c.precision)) return 0;
-  // Per column: the layers (3 floats each), the cropped packed input (4) and its blurred copy (3).
-  const std::uint64_t column_bytes = static_cast<std::uint64_t>(h) * (c.pattern.layers() * 12 + 16 + 12);
-  if (static_cast<std::uint64_t>(w) * column_bytes <= kCpuWholeBufferBytes) return 0;
-  const int halo = c.pattern.half() * c.pattern.spacing_px;
-  return std::max<int>(64, static_cast<int>(kCpuWholeBufferBytes / column_bytes) - 2 * halo);
+  const int reach_rows = c.pattern.half() * c.pattern.spacing_px;
+  const std::uint64_t row_bytes = static_cast<std::uint64_t>(w) * c.pattern.layers() * 12;  // f32 rgb
+  if (c.streamed) return flag_stream_band_rows(c.band_rows, true, reach_rows, row_bytes);
+  if (static_cast<std::uint64_t>(h) * row_bytes <= kCpuWholeBufferBytes) return 0;
+  return std::max<int>(8, static_cast<int>(kCpuWholeBufferBytes / row_bytes) - 2 * reach_rows);
 }
 
 // adaptive = on, as the GPU computes it: FLAG on its grid (full or reduced) with the layers the
@@ -107,8 +125,8 @@ Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
   FlagConfig sized_config = c;
   sized_config.pattern = sized;
   Image blurred;
-  if (const int strip = s == 1 ? cpu_strip_px(sized_config, packed.width, packed.height) : 0; strip > 0)
-    blurred = flag_blur_in_strips(packed, sized, c.precision, strip, in.threads);
+  if (const int band = s == 1 ? cpu_band_rows(sized_config, packed.width, packed.height) : 0; band > 0)
+    blurred = flag_blur_streamed(packed, sized, c.precision, band, in.threads);
   else
     blurred = flag_blur(packed, sized, c.precision, in.threads);
   for (int y = 0; y < packed.height; ++y)
@@ -158,7 +176,18 @@ void declare_flag(std::vector<Method>& methods) {
                                "rounding: a layer nothing reaches keeps the scan's rounding residue, which the worst "
                                "case adds and adaptive skips), or up to one rounding of the layer format in those "
                                "tiles"),
-               adaptive_tile_option()};
+               adaptive_tile_option(),
+               {"layer_buffer",
+                "flag: where the horizontal pass leaves the layers for the vertical pass. full: the paper's 3D buffer "
+                "(W x H x ceil(N/2) texels; the default and the reference); streamed: a ring of B + 2 n k rows filled "
+                "band by band (B = --band-rows output rows a band), the two passes alternating per band in one "
+                "command buffer: the full buffer's image bit for bit in a fraction of its memory",
+                0, 0, 0, false, flag_layer_buffers(), {0, 1}},
+               {"band_rows",
+                "flag, layer_buffer = streamed: output rows per band (0: auto, the largest band whose ring fits 16 MiB "
+                "on CPU devices such as lavapipe and 32 MiB on GPUs, at least 8 rows). Fewer rows: less memory, more "
+                "dispatches (two a band); the image is the same for every value",
+                0, 0, 1 << 16, true, {}}};
   // Every function below parses the options once (flag_config) and reads only the FlagConfig.
   m.device = [](const FilterOptions& o) {
     const FlagConfig c = flag_config(o);
@@ -172,8 +201,8 @@ void declare_flag(std::vector<Method>& methods) {
     if (c.adaptive) return flag_adaptive_cpu(in, c);
     if (c.buffer_scale != 1)
       return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);
-    if (const int strip = cpu_strip_px(c, in.packed.width, in.packed.height); strip > 0)
-      return flag_blur_in_strips(in.packed, c.pattern, c.precision, strip, in.threads);
+    if (const int band = cpu_band_rows(c, in.packed.width, in.packed.height); band > 0)
+      return flag_blur_streamed(in.packed, c.pattern, c.precision, band, in.threads);
     return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
   m.make_gpu = make_flag_gpu;
@@ -183,10 +212,8 @@ void declare_flag(std::vector<Method>& methods) {
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
-    if (const int strip = cpu_strip_px(c, w, h); strip > 0) {
-      const int columns = std::min(w, strip + 2 * c.pattern.half() * c.pattern.spacing_px);
-      return static_cast<std::uint64_t>(columns) * h * (c.pattern.layers() * 12 + 16 + 12);
-    }
+    if (const int band = cpu_band_rows(c, w, h); band > 0)
+      return flag_streamed_cpu_bytes(w, h, c.pattern, band, default_cpu_threads());
     const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
     const auto lw = static_cast<std::uint64_t>(ceil_div(w, c.buffer_scale));
     const auto lh = static_cast<std::uint64_t>(ceil_div(h, c.buffer_scale));

@@ -10,6 +10,10 @@ layout(push_constant) uniform Params {
   float coc_scale_px; // r = coc_scale_px * |D - P| / D, see kernels/core/lens.hpp
   float focus_m;
   float max_radius_px;
+  // FLAG streamed (kernels/flag/flag_gpu.hpp): the rows [band_y0_px, band_y1_px) one dispatch of a
+  // band covers; its invocation rows count from band_y0_px. Other passes leave them 0 and ignore them.
+  int band_y0_px;
+  int band_y1_px;
 } params;
 
 #include "disc.glsl"

@@ -29,7 +29,7 @@ layout(binding = 1, LAYER_FORMAT) uniform writeonly image3D layers;
 void main() {
   // Invocation g covers block g / k of OUTPUTS k columns, phase g % k.
   const ivec2 g = ivec2(gl_GlobalInvocationID.xy);
-  const ivec2 p0 = ivec2((g.x / SPACING) * (OUTPUTS * SPACING) + g.x % SPACING, g.y);
+  const ivec2 p0 = ivec2((g.x / SPACING) * (OUTPUTS * SPACING) + g.x % SPACING, band_row(g.y));
 #if ADAPTIVE
   // Before any invocation returns: the largest D and Z over the tiles of the subgroup's pixels.
   const ivec2 bounds = subgroup_tile_bounds(p0, p0 + ivec2((OUTPUTS - 1) * SPACING, 0));
@@ -38,7 +38,7 @@ void main() {
 #else
   const int reach_n = LAYERS - 1, top_layer = LAYERS - 1;
 #endif
-  if (outside(p0)) return;
+  if (outside_band(p0)) return;
   vec3 bins[OUTPUTS][LAYERS];
   flag_bins(p0, reach_n, bins);
   for (int m = 0; m < OUTPUTS; ++m) {
@@ -60,9 +60,9 @@ void main() {
       vec3 q = vec3(0.0);
       for (int c = 0; c < 3; ++c)
         if (scale[c] > 0.0) q[c] = clamp((running[c] - offset[c]) / scale[c], 0.0, 1.0);
-      imageStore(layers, ivec3(p, z), vec4(q, 0.0));
+      imageStore(layers, ivec3(p.x, layer_row(p.y), z), vec4(q, 0.0));
 #else
-      imageStore(layers, ivec3(p, z), vec4(running, 0.0));
+      imageStore(layers, ivec3(p.x, layer_row(p.y), z), vec4(running, 0.0));
 #endif
     }
   }

@@ -40,7 +40,8 @@ void main() {
   const int n = LAYERS - 1, k = SPACING;
   // Workgroup (g + G s, y), G = ceil(LAYERS / 8): layers 8 g .. 8 g + 7 (those past n store nothing)
   // of phase s % k, lattice columns c0 .. c0 + SEGMENT - 1 of it, c0 = (s / k) SEGMENT.
-  const int groups = (LAYERS + 7) / 8, s = int(gl_WorkGroupID.x) / groups, y = int(gl_WorkGroupID.y);
+  const int groups = (LAYERS + 7) / 8, s = int(gl_WorkGroupID.x) / groups;
+  const int y = band_row(int(gl_WorkGroupID.y));
   const int z_first = (int(gl_WorkGroupID.x) % groups) * 8, z = z_first + int(gl_LocalInvocationID.x);
   const int c0 = (s / k) * SEGMENT, x0 = s % k + c0 * k;  // column t of the segment is x0 + t k
   if (x0 >= params.width_px) return;  // uniform: a phase with fewer columns than the dispatch covers
@@ -94,10 +95,10 @@ void main() {
       vec3 q = vec3(0.0);
       for (int c = 0; c < 3; ++c)
         if (scale[c] > 0.0) q[c] = clamp((running[c] - offset[c]) / scale[c], 0.0, 1.0);
-      imageStore(layers, ivec3(p, z), vec4(q, 0.0));
+      imageStore(layers, ivec3(p.x, layer_row(y), z), vec4(q, 0.0));
     }
 #else
-    if (written) imageStore(layers, ivec3(p, z), vec4(running, 0.0));
+    if (written) imageStore(layers, ivec3(p.x, layer_row(y), z), vec4(running, 0.0));
 #endif
   }
 }

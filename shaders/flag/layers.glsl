@@ -13,6 +13,8 @@ layout(constant_id = 5) const bool MASKED_BINS = false;
 
 layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 
+#include "layer_rows.glsl"
+
 // bins[m][z] = the row samples whose disc reaches exactly layer z in column p0.x + m k, added left to
 // right. Each loaded sample serves up to OUTPUTS columns (their offsets i - m differ); its disc
 // index is computed once, so in column m it reaches layer z = min(isqrt(d), n), d = index - (i - m)^2.

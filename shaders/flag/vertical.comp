@@ -8,6 +8,7 @@
 // layer read here (its Z covers what this tile reads).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
+#include "layer_rows.glsl"
 
 layout(constant_id = 0) const int LAYERS = 21;
 
@@ -25,7 +26,7 @@ layout(std430, binding = 3 + BRACKETED) readonly buffer Packed { vec4 packed_inp
 #endif
 
 void main() {
-  const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  const ivec2 p = ivec2(gl_GlobalInvocationID.x, band_row(int(gl_GlobalInvocationID.y)));
 #if ADAPTIVE
   // Before any invocation returns: D of this pixel's tile (-1 outside the frame), and the largest
   // over the subgroup (uniform).
@@ -34,7 +35,7 @@ void main() {
   if (reach < 0) return;  // no pixel of the frame
   const int rows = min(isqrt(reach), LAYERS - 1);
 #endif
-  if (outside(p)) return;
+  if (outside_band(p)) return;
   const int n = params.half_n, k = params.spacing_px;
 #if ADAPTIVE
   if (pixel_reach == 0) {
@@ -57,7 +58,7 @@ void main() {
 #endif
     const int sy = p.y + j * k;
     if (sy < 0 || sy >= params.height_px) continue;
-    const vec3 q = imageLoad(layers, ivec3(p.x, sy, abs(j))).rgb;
+    const vec3 q = imageLoad(layers, ivec3(p.x, layer_row(sy), abs(j))).rgb;
 #if BRACKETED
     const uint i = uint(sy * LAYERS + abs(j));
     const vec3 offset = uintBitsToFloat(bracket_bits[i].rgb);

@@ -169,6 +169,27 @@ TEST(CpuReferences, ScanLayersStayWithinTheirSummationBoundOfTheOrderedOnes) {
   RecordProperty("worst_error_in_u_times_S", std::to_string(worst_ratio));
 }
 
+// Streamed through a ring of rows (the GPU's layer_buffer = streamed order, and how the method's
+// reference bounds its memory past 256 MiB): flag_blur's image bit for bit, for bands of one row (the
+// ring wraps every 2 n k + 1 rows), a few rows, and more rows than the image (no wrap at all).
+TEST(CpuReferences, StreamedFlagEqualsTheStripFlagBitForBit) {
+  for (const PackedScene& s : packed_scenes())
+    for (LayerPrecision precision : {LayerPrecision::f32, LayerPrecision::f16, LayerPrecision::r11g11b10f}) {
+      const Image strips = flag_blur(s.packed, s.pattern, precision, 2);
+      for (int band_rows : {1, 5, 1000})
+        for (int threads : {1, 3})
+          EXPECT_TRUE(same_bits(flag_blur_streamed(s.packed, s.pattern, precision, band_rows, threads), strips))
+              << s.name << " N " << s.pattern.size_n << " k " << s.pattern.spacing_px << " " << to_string(precision)
+              << " band " << band_rows << " threads " << threads;
+    }
+}
+
+TEST(CpuReferences, StreamedRefusesBracketedPrecisionsAndEmptyBands) {
+  const PackedScene s = packed_scenes().front();
+  EXPECT_THROW(flag_blur_streamed(s.packed, s.pattern, LayerPrecision::unorm16_bracketed, 4), std::invalid_argument);
+  EXPECT_THROW(flag_blur_streamed(s.packed, s.pattern, LayerPrecision::f32, 0), std::invalid_argument);
+}
+
 TEST(CpuReferences, ScanRefusesBracketedPrecisions) {
   const PackedScene s = packed_scenes().front();
   EXPECT_THROW(flag_horizontal_scan(s.packed, s.pattern, LayerPrecision::unorm10_bracketed), std::invalid_argument);
@@ -183,6 +204,9 @@ TEST(CpuReferences, FastReferencesOnTinyImages) {
     const Image packed = pack_gather_input(color, radius, p, 2);
     EXPECT_TRUE(same_bits(naive_gather(packed, p, 2), naive_gather_reference(packed, p, 1))) << w << "x" << h;
     EXPECT_TRUE(same_bits(flag_blur(packed, p, LayerPrecision::f16, 2),
+                          flag_blur_reference(packed, p, LayerPrecision::f16, 1)))
+        << w << "x" << h;
+    EXPECT_TRUE(same_bits(flag_blur_streamed(packed, p, LayerPrecision::f16, 1, 2),
                           flag_blur_reference(packed, p, LayerPrecision::f16, 1)))
         << w << "x" << h;
   }

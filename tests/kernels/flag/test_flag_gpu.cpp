@@ -120,6 +120,48 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
     }
 }
 
+// Streamed layers (layer_buffer = streamed): the full buffer's image bit for bit, every precision,
+// binning and adaptive, with bands of 1 row (the ring, 2 n k + 1 rows, wraps every few rows), a few
+// rows, and auto (one band at this height); and a smaller layer image than the full buffer's.
+TEST(FlagStreamed, EqualsTheFullBufferBitForBit) {
+  const Scene s = make_scene("hoops", 63, 46);  // partial workgroups at the right and bottom
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{7, 3}}) {
+    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+    vk::TimestampQueries timer(context(), 16);
+    struct Variant {
+      std::string precision;
+      std::map<std::string, double> values;
+      std::vector<int> bands;
+    };
+    const std::vector<Variant> variants = {{"f32", {}, {1, 5, 0}},
+                                           {"f32", {{"horizontal_bins", 1}}, {3}},   // indexed
+                                           {"f32", {{"horizontal_bins", 3}}, {3}},   // scan
+                                           {"f32", {{"adaptive", 1}}, {2}},
+                                           {"f16", {}, {2}},
+                                           {"r11g11b10f", {}, {2}},
+                                           {"unorm16_bracketed", {}, {2}}};
+    for (const Variant& v : variants) {
+      FilterOptions o = options_for("flag", pattern, v.precision);
+      for (const auto& [key, value] : v.values) o.values[key] = value;
+      auto full = find_method("flag").make_gpu(frame, o);
+      gpu::run_frames(frame, *full, timer);
+      const Image expected = frame.read_output();
+      for (int band : v.bands) {
+        FilterOptions streamed = o;
+        streamed.values["layer_buffer"] = 1;
+        streamed.values["band_rows"] = band;
+        auto filter = find_method("flag").make_gpu(frame, streamed);
+        const auto passes = gpu::run_frames(frame, *filter, timer);
+        EXPECT_EQ(passes.back().pass, "streamed");
+        EXPECT_TRUE(same_bits(frame.read_output(), expected))
+            << "N " << pattern.size_n << " k " << pattern.spacing_px << " " << v.precision << " band " << band;
+        if (band > 0 && band < 10) EXPECT_LT(filter->intermediate_bytes(), full->intermediate_bytes()) << band;
+      }
+    }
+  }
+}
+
 // FLAG with scan bins on the GPU against the vertical pass over its CPU mirror's layers: bit for bit.
 bool scan_equals_cpu_mirror(const Scene& s, const GatherPattern& pattern, double coc_scale) {
   const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * coc_scale);

@@ -26,6 +26,35 @@ TEST(FlagMemory, CpuReferenceIsBoundedByStrips) {
   EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 21 * 12);
 }
 
+// Streamed layers: the ring of B + 2 n k rows as the model sizes it and as the driver allocates it.
+// The goal at 1080p / 41x41 (k = 1) f16: <= 16 MiB on lavapipe's auto band (12 rows: 52 rows of
+// 1920 x 21 texels), against 332 MiB for the full buffer; explicit bands set the ring's rows.
+TEST(FlagMemory, StreamedRingIsBandPlusTwiceTheReach) {
+  const Method& flag = find_method("flag");
+  FilterOptions o = flag.defaults({41, 1});
+  o.values["layer_buffer"] = 1;
+  const MemoryUse model = flag.gpu_memory(o, 1920, 1080, nullptr);  // no device: lavapipe's auto
+  EXPECT_EQ(model.details["streamed"]["band_rows"], 12);
+  EXPECT_EQ(model.details["extent"]["height"], 52);
+  EXPECT_EQ(model.bytes, 1920ull * 52 * 21 * 8);
+  EXPECT_LE(model.bytes, 16ull << 20);
+  o.values["band_rows"] = 100;
+  EXPECT_EQ(flag.gpu_memory(o, 1920, 1080, nullptr).details["extent"]["height"], 140);
+  o.values["band_rows"] = 5000;  // more than the frame: the full buffer's rows, no more
+  EXPECT_EQ(flag.gpu_memory(o, 1920, 1080, nullptr).details["extent"]["height"], 1080);
+  // 4K / 81x81: the full buffer's 2.7 GB passes lavapipe's 2 GiB heap; the ring (auto: the 8-row floor,
+  // 2 n k = 80 rows: 106 MiB) does not.
+  FilterOptions big = flag.defaults({81, 1});
+  EXPECT_GT(flag.gpu_memory(big, 3840, 2160, nullptr).bytes, 2ull << 30);
+  big.values["layer_buffer"] = 1;
+  EXPECT_EQ(flag.gpu_memory(big, 3840, 2160, nullptr).bytes, 3840ull * 88 * 41 * 8);
+  vk::Context ctx;
+  big.values["band_rows"] = 8;
+  EXPECT_GE(flag.gpu_memory(big, 3840, 2160, &ctx).bytes, 3840ull * 88 * 41 * 8);
+  // The CPU reference streams the same way: its ring (f32 rgb, rows of whole vectors), not the frame.
+  EXPECT_LT(flag.cpu_memory_bytes(big, 3840, 2160), 3840ull * 2160 * 41 * 12 / 8);
+}
+
 // Small buffers share blocks (the best-practices layer's advice); each keeps its own bytes, a freed
 // range is reused, and a buffer over the sub-allocation limit gets memory of its own.
 TEST(DeviceMemory, SmallBuffersShareBlocksAndKeepTheirOwnData) {
