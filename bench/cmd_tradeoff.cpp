@@ -51,6 +51,7 @@ void tradeoff(TradeoffOptions& o) {
   axes.option_values = o.method_options.values_for(axes.methods);
   axes.sweep_options = true;
   axes.max_coc_px = {o.max_coc_px};
+  axes.apertures = o.axes.aperture_shapes();
 
   SweepSettings s = o.sweep.settings("tradeoff", "plot_tradeoff.py");
   s.config = {{"scene", axes.scenes.front()},
@@ -61,6 +62,7 @@ void tradeoff(TradeoffOptions& o) {
               {"patterns", o.axes.sizes},
               {"spacing_px", o.axes.spacing_px},
               {"methods", axes.methods},
+              {"apertures", o.axes.apertures},
               {"pareto", "minimise frame_ms median, maximise PSNR vs the energy_sum exact reference"}};
   s.derive = [](nlohmann::json& doc) { doc["pareto_front"] = pareto_ids(doc["points"]); };
   s.summary = [](const nlohmann::json& doc) {
@@ -84,7 +86,7 @@ void add_tradeoff_command(CLI::App& app) {
   a.resolutions = {"800x600"};
   a.scenes = {"hoops"};
   a.backends = {"gpu"};
-  a.add_to(cmd, {Axis::sizes, Axis::methods}, {Axis::resolutions, Axis::scenes, Axis::backends});
+  a.add_to(cmd, {Axis::sizes, Axis::methods, Axis::apertures}, {Axis::resolutions, Axis::scenes, Axis::backends});
   o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px, "The scene's largest CoC radius in px (sets the f-stop)")
                    ->check(finite_number())
                    ->check(CLI::PositiveNumber);
