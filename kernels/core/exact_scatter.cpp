@@ -200,6 +200,45 @@ struct ShapeStencil {
   double area = 1.0;
 };
 
+// The shape's horizontal extent on the line at height y: [first, second], empty when first > second.
+std::pair<double, double> extent_at(const Aperture& aperture, const std::vector<Point>& polygon, double r, double y) {
+  double left = 1e300, right = -1e300;
+  for (std::size_t k = 0; k < polygon.size(); ++k) {
+    const Point& p = polygon[k];
+    const Point& q = polygon[(k + 1) % polygon.size()];
+    if (y < std::min(p.second, q.second) || y > std::max(p.second, q.second)) continue;
+    const double x = p.second == q.second ? p.first : p.first + (y - p.second) / (q.second - p.second) * (q.first - p.first);
+    const double x_other = p.second == q.second ? q.first : x;
+    left = std::min({left, x, x_other}), right = std::max({right, x, x_other});
+  }
+  if (aperture.curvature > 0) {
+    if (std::abs(y) > r) return {1, -1};
+    const double half = std::sqrt(r * r - y * y);
+    left = std::max(left, -half), right = std::min(right, half);
+  }
+  return {left, right};
+}
+
+// A superset of the shape's horizontal extent within the strip y0 <= y <= y1: the polygon's vertices
+// inside the strip and its crossings of the strip's edges (for curved blades, within the disc's).
+std::pair<double, double> extent_over(const Aperture& aperture, const std::vector<Point>& polygon, double r,
+                                      double y0, double y1) {
+  double left = 1e300, right = -1e300;
+  for (const double y : {y0, y1}) {
+    const auto [l, rt] = extent_at(Aperture{aperture.blades, aperture.rotation_deg, 0.0}, polygon, r, y);
+    if (l <= rt) left = std::min(left, l), right = std::max(right, rt);
+  }
+  for (const Point& v : polygon)
+    if (v.second >= y0 && v.second <= y1) left = std::min(left, v.first), right = std::max(right, v.first);
+  if (aperture.curvature > 0) {
+    const double nearest = y0 <= 0 && y1 >= 0 ? 0.0 : std::min(std::abs(y0), std::abs(y1));
+    if (nearest > r) return {1, -1};
+    const double half = std::sqrt(r * r - nearest * nearest);
+    left = std::max(left, -half), right = std::min(right, half);
+  }
+  return {left, right};
+}
+
 ShapeStencil make_shape_stencil(const Aperture& aperture, float radius_px) {
   ShapeStencil st;
   st.reach = reach_of(radius_px);  // the shape lies within its circumscribed disc
@@ -213,15 +252,21 @@ ShapeStencil make_shape_stencil(const Aperture& aperture, float radius_px) {
   const double r = radius_px;
   const std::vector<Point> polygon = aperture.polygon(r);
   double area = 0;
+  std::vector<double> row(2 * st.reach + 1);
   for (int dy = -st.reach; dy <= st.reach; ++dy) {
-    std::vector<double> row(2 * st.reach + 1);
+    // Per row only the squares the shape's edge crosses are clipped (O(r) a stencil, not O(r^2)): a
+    // convex shape holds a square exactly when it holds the square's top and bottom edges, i.e. when
+    // [dx - 0.5, dx + 0.5] lies within its extents on both lines; outside the strip's extent it holds none.
+    const double y0 = dy - 0.5, y1 = dy + 0.5;
+    const auto top = extent_at(aperture, polygon, r, y0), bottom = extent_at(aperture, polygon, r, y1);
+    const double inner_left = std::max(top.first, bottom.first), inner_right = std::min(top.second, bottom.second);
+    const auto outer = extent_over(aperture, polygon, r, y0, y1);
     int first = 0, last = -1;  // an empty run until something overlaps (dx itself may be negative)
     for (int dx = -st.reach; dx <= st.reach; ++dx) {
-      // A square whose four corners lie inside the convex shape lies inside: exactly 1.
-      bool inside = true;
-      for (double cy : {dy - 0.5, dy + 0.5})
-        for (double cx : {dx - 0.5, dx + 0.5}) inside = inside && aperture.gauge(cx, cy) <= r;
-      const double c = inside ? 1.0 : shape_square_coverage(aperture, polygon, r, dx - 0.5, dy - 0.5);
+      const double x0 = dx - 0.5, x1 = dx + 0.5;
+      double c = 0.0;
+      if (x0 >= inner_left && x1 <= inner_right) c = 1.0;
+      else if (x1 > outer.first && x0 < outer.second) c = shape_square_coverage(aperture, polygon, r, x0, y0);
       row[dx + st.reach] = c;
       if (c > 0) {
         if (last < first) first = dx;
