@@ -33,6 +33,17 @@ void add_methods_command(CLI::App& app) {
                                        : fmt::format("{}", fmt::join(spec.choices, " | "));
         fmt::print("    {} {} (default {})\n", spec.flag(), values, spec.to_json(spec.default_value).dump());
       }
+      // What it draws (Method::aperture_unsupported), probed at its defaults on a few apertures.
+      std::vector<std::string> draws;
+      std::string first_refusal;
+      for (const char* shape : {"disc", "blades5", "blades6", "blades6-rot30", "blades7-curv0.5"}) {
+        FilterOptions o = m.defaults({41, 2});
+        o.aperture = parse_aperture(shape);
+        if (const std::string why = aperture_unsupported(m, o); why.empty()) draws.push_back(shape);
+        else if (first_refusal.empty()) first_refusal = why;
+      }
+      fmt::print("    apertures at its defaults: {}{}\n", fmt::join(draws, ", "),
+                 first_refusal.empty() ? "" : " (not the others: " + first_refusal + ")");
     }
   });
 }

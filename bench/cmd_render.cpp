@@ -121,6 +121,10 @@ void render(RenderOptions& o) {
   if (!o.precision.empty()) options.precision = o.precision;
   options.buffer_scale = o.buffer_scale;
   for (const auto& [key, value] : o.method_options.values_for({o.method})) options.values[key] = value;
+  std::optional<Lens> lens;
+  if (!o.lens_path.empty()) lens = load_lens_json(o.lens_path);
+  // The aperture: --aperture when given, else the lens file's, else the disc.
+  options.aperture = o.axes.given(Axis::apertures) ? o.axes.aperture_shapes().front() : lens ? lens->aperture : Aperture{};
   check_options(method, options);
   check_image_extension(o.out_path);
   check_writable_file(o.out_path, {o.color_path, o.depth_path, o.lens_path});
@@ -130,8 +134,6 @@ void render(RenderOptions& o) {
         "--fit-max-coc {} must be a finite number of pixels > 0 (the scene's largest CoC radius; for a sharp image "
         "use a lens file with a large f_stop)",
         *o.fit_max_coc_px));
-  std::optional<Lens> lens;
-  if (!o.lens_path.empty()) lens = load_lens_json(o.lens_path);
   int width_px = o.width_px, height_px = o.height_px;
   if (!o.color_path.empty()) {
     const ImageFileInfo color = read_image_info(o.color_path), depth = read_image_info(o.depth_path);
@@ -156,13 +158,14 @@ void render(RenderOptions& o) {
                                      : load_scene(o.color_path, o.depth_path);
   if (lens) scene.lens = *lens;
   if (o.fit_max_coc_px) scene.lens = with_max_coc_radius(scene.lens, scene.depth_m, *o.fit_max_coc_px);
+  scene.lens.aperture = options.aperture;
   check_depth(scene.depth_m);
   warn_about_clamping(scene, options.pattern, o);
   warn_about_input_range(scene.color, method, options);
 
-  fmt::print("{} {}x{}, {} ({}) on {}, N={} k={} (max radius {} px), f/{:.3g} focus {} m\n", scene.name,
+  fmt::print("{} {}x{}, {} ({}) on {}, N={} k={} (max radius {} px), aperture {}, f/{:.3g} focus {} m\n", scene.name,
              scene.color.width, scene.color.height, o.method, options.precision, o.backend, o.size_n, o.spacing_px,
-             options.pattern.max_radius_px(),
+             options.pattern.max_radius_px(), options.aperture.name(),
              scene.lens.f_stop, scene.lens.focus_distance_m);
   Image result;
   nlohmann::json stats;
@@ -207,7 +210,7 @@ void add_render_command(CLI::App& app) {
   a.scales = {1};
   a.backends = {"gpu"};  // precisions: empty, the method's own
   a.add_to(cmd, {}, {Axis::scenes, Axis::resolutions, Axis::methods, Axis::sizes, Axis::precisions, Axis::scales,
-                     Axis::backends});
+                     Axis::backends, Axis::apertures});
   CLI::Option* scene = a.option(Axis::scenes);
   auto* color = cmd->add_option("--color", o->color_path, "Colour image (linear RGB, e.g. EXR)")->check(CLI::ExistingFile);
   auto* depth = cmd->add_option("--depth", o->depth_path, "Depth image: planar view-space depth in metres, channel 0")
@@ -216,7 +219,8 @@ void add_render_command(CLI::App& app) {
   depth->needs(color);
   scene->excludes(color);
   cmd->add_option("--lens", o->lens_path,
-                  "Lens JSON: focal_length_mm, f_stop, sensor_width_mm, focus_distance_m [, coc_model]")
+                  "Lens JSON: focal_length_mm, f_stop, sensor_width_mm, focus_distance_m [, coc_model] [, aperture: \"blades6\" "
+                  "or {blades, rotation_deg, curvature}]")
       ->check(CLI::ExistingFile);
   // Checked in render() with the radius's own message (NaN and infinities included).
   cmd->add_option("--fit-max-coc", o->fit_max_coc_px, "Set the f-stop so the scene's largest CoC radius is this many px");

@@ -1,6 +1,8 @@
 // `bokehbench tradeoff`: time per frame against error for every configuration of every method on one
 // scene (precisions, buffer scales, patterns and each method's own speed/quality options), measured
 // interleaved, with the Pareto front (fastest for its accuracy) drawn and listed.
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "accuracy.hpp"
@@ -22,17 +24,33 @@ struct TradeoffOptions {
   CLI::Option* coc_opt = nullptr;
 };
 
-// Configurations nothing beats on both median time and PSNR (exact = +inf), fastest first. PSNRs
-// within 0.1 dB count as the same accuracy (e.g. FLAG f16 vs f32 on the same pattern): no one can
-// see that difference, so it should not buy a slower configuration a place on the front.
+// The aperture a point drew (files from before apertures: the disc).
+std::string aperture_of(const nlohmann::json& point) {
+  return point.contains("aperture") ? point["aperture"]["name"].get<std::string>() : "disc";
+}
+
+// Configurations nothing beats on both median time and PSNR (exact = +inf), fastest first, among the
+// points of each aperture (each is scored against its own shape's exact reference, so points of two
+// apertures answer different questions). PSNRs within 0.1 dB count as the same accuracy (e.g. FLAG f16
+// vs f32 on the same pattern): no one can see that difference, so it should not buy a slower
+// configuration a place on the front.
 nlohmann::json pareto_ids(const nlohmann::json& points) {
-  std::vector<double> time_ms, psnr_db;
-  for (const auto& c : points) {
-    time_ms.push_back(c["frame_ms"]["median"].get<double>());
-    psnr_db.push_back(psnr_for_ranking(c["error"]["vs_energy_sum"]));
-  }
+  std::vector<std::string> apertures;
+  for (const auto& c : points)
+    if (std::find(apertures.begin(), apertures.end(), aperture_of(c)) == apertures.end())
+      apertures.push_back(aperture_of(c));
   nlohmann::json front = nlohmann::json::array();
-  for (std::size_t i : pareto_front(time_ms, psnr_db, 0.1)) front.push_back(points[i]["id"]);
+  for (const auto& aperture : apertures) {
+    std::vector<double> time_ms, psnr_db;
+    std::vector<nlohmann::json> ids;
+    for (const auto& c : points) {
+      if (aperture_of(c) != aperture) continue;
+      time_ms.push_back(c["frame_ms"]["median"].get<double>());
+      psnr_db.push_back(psnr_for_ranking(c["error"]["vs_energy_sum"]));
+      ids.push_back(c["id"]);
+    }
+    for (std::size_t i : pareto_front(time_ms, psnr_db, 0.1)) front.push_back(ids[i]);
+  }
   return front;
 }
 
@@ -51,6 +69,7 @@ void tradeoff(TradeoffOptions& o) {
   axes.option_values = o.method_options.values_for(axes.methods);
   axes.sweep_options = true;
   axes.max_coc_px = {o.max_coc_px};
+  axes.apertures = o.axes.aperture_shapes();
 
   SweepSettings s = o.sweep.settings("tradeoff", "plot_tradeoff.py");
   s.config = {{"scene", axes.scenes.front()},
@@ -61,15 +80,19 @@ void tradeoff(TradeoffOptions& o) {
               {"patterns", o.axes.sizes},
               {"spacing_px", o.axes.spacing_px},
               {"methods", axes.methods},
+              {"apertures", o.axes.apertures},
               {"pareto", "minimise frame_ms median, maximise PSNR vs the energy_sum exact reference"}};
   s.derive = [](nlohmann::json& doc) { doc["pareto_front"] = pareto_ids(doc["points"]); };
   s.summary = [](const nlohmann::json& doc) {
-    fmt::print("\nPareto front (fastest first: nothing is both faster and more accurate):\n");
+    fmt::print("\nPareto front (fastest first: nothing is both faster and more accurate; each aperture its own):\n");
+    std::string shown;
     for (const auto& id : doc["pareto_front"])
       for (const auto& c : doc["points"])
-        if (c["id"] == id)
+        if (c["id"] == id) {
+          if (aperture_of(c) != shown) fmt::print(" aperture {}:\n", shown = aperture_of(c));
           fmt::print("  for {:9.2f} ms you can have at best {:>9}  ({})\n", c["frame_ms"]["median"].get<double>(),
                      psnr_text(c["error"]["vs_energy_sum"]), id.get<std::string>());
+        }
   };
   run_sweep(expand(axes), s);
 }
@@ -84,7 +107,7 @@ void add_tradeoff_command(CLI::App& app) {
   a.resolutions = {"800x600"};
   a.scenes = {"hoops"};
   a.backends = {"gpu"};
-  a.add_to(cmd, {Axis::sizes, Axis::methods}, {Axis::resolutions, Axis::scenes, Axis::backends});
+  a.add_to(cmd, {Axis::sizes, Axis::methods, Axis::apertures}, {Axis::resolutions, Axis::scenes, Axis::backends});
   o->coc_opt = cmd->add_option("--max-coc", o->max_coc_px, "The scene's largest CoC radius in px (sets the f-stop)")
                    ->check(finite_number())
                    ->check(CLI::PositiveNumber);

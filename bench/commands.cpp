@@ -75,6 +75,12 @@ AxisSpelling spelling(Axis axis) {
               "Methods (default: every method in the default sweeps)"};
     case Axis::backends:
       return {"--backends,--backend", "gpu (Vulkan) or cpu (reference)", "gpu and/or cpu"};
+    case Axis::apertures:
+      return {"--apertures,--aperture",
+              "Lens aperture: disc, or blades<N>[-rot<degrees>][-curv<0..1>] (N = 5..9; rotation 0: a vertex up; "
+              "curvature 1: the disc), e.g. blades6",
+              "Lens apertures (an axis; methods that cannot draw one are skipped with the reason): disc, or "
+              "blades<N>[-rot<degrees>][-curv<0..1>] (N = 5..9; rotation 0: a vertex up), e.g. disc blades6 blades5"};
   }
   throw std::logic_error("unknown axis");
 }
@@ -100,6 +106,7 @@ void AxisFlags::add_to(CLI::App* cmd, const std::vector<Axis>& lists, const std:
         break;
       case Axis::methods: opt = cmd->add_option(s.names, methods, help); break;
       case Axis::backends: opt = cmd->add_option(s.names, backends, help)->check(CLI::IsMember({"gpu", "cpu"})); break;
+      case Axis::apertures: opt = cmd->add_option(s.names, apertures, help); break;
     }
     opt->capture_default_str();
     options_[axis] = opt;
@@ -157,6 +164,7 @@ void AxisFlags::resolve(SweepFlags* sweep) {
   refuse_repeats("--scenes", scenes);
   refuse_repeats("--methods", methods);
   refuse_repeats("--backends", backends);
+  refuse_repeats("--apertures", apertures);
   for (Axis axis : single_) {
     std::size_t count = 0;
     switch (axis) {
@@ -167,6 +175,7 @@ void AxisFlags::resolve(SweepFlags* sweep) {
       case Axis::scenes: count = scenes.size(); break;
       case Axis::methods: count = methods.size(); break;
       case Axis::backends: count = backends.size(); break;
+      case Axis::apertures: count = apertures.size(); break;
     }
     if (count != 1) {
       const std::string names = spelling(axis).names;
@@ -176,6 +185,19 @@ void AxisFlags::resolve(SweepFlags* sweep) {
   }
   frame_sizes();  // the errors name the text now, before any work
   patterns();
+  aperture_shapes();
+}
+
+std::vector<Aperture> AxisFlags::aperture_shapes() const {
+  std::vector<Aperture> out;
+  for (const auto& text : apertures) {
+    try {
+      out.push_back(parse_aperture(text));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("--apertures: {}", e.what()));
+    }
+  }
+  return out;
 }
 
 std::vector<GatherPattern> AxisFlags::patterns() const {

@@ -8,6 +8,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "aperture.hpp"
+
 namespace bokeh {
 
 struct SweepSettings;
@@ -40,10 +42,11 @@ class MethodOptionFlags {
 // A command adds the axes it has: `lists` take one value or more, `single` ones exactly one (render
 // makes one image; figure9 draws one frame size). --quick gives each axis its quick value unless the
 // axis was given on the command line.
-enum class Axis { sizes, resolutions, precisions, scales, scenes, methods, backends };
+enum class Axis { sizes, resolutions, precisions, scales, scenes, methods, backends, apertures };
 
 struct AxisFlags {
   std::vector<std::string> sizes, resolutions, precisions, scenes, methods, backends;  // as given or defaulted
+  std::vector<std::string> apertures = {"disc"};  // Aperture::name()s
   std::vector<int> scales;
   int spacing_px = 2;
   bool quick = false;
@@ -61,6 +64,7 @@ struct AxisFlags {
 
   std::vector<GatherPattern> patterns() const;  // validated
   std::vector<Resolution> frame_sizes() const;  // validated
+  std::vector<Aperture> aperture_shapes() const;  // validated
 
  private:
   std::map<Axis, CLI::Option*> options_;

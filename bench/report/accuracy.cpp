@@ -16,11 +16,12 @@ ExactReferences exact_references(const Scene& scene, const Lens& lens, float max
   const Image radius = coc_radius_image(scene.depth_m, lens, max_radius_px);
   const auto start = std::chrono::steady_clock::now();
   const float largest_radius_px = *std::max_element(radius.pixels.begin(), radius.pixels.end());
-  ExactReferences refs{cache.get(scene.color, radius, scene.depth_m, ScatterComposite::energy_sum),
-                       cache.get(scene.color, radius, scene.depth_m, ScatterComposite::depth_ordered),
+  const int threads = default_cpu_threads();
+  ExactReferences refs{cache.get(scene.color, radius, scene.depth_m, ScatterComposite::energy_sum, threads, lens.aperture),
+                       cache.get(scene.color, radius, scene.depth_m, ScatterComposite::depth_ordered, threads, lens.aperture),
                        static_cast<int>(std::ceil(largest_radius_px))};
-  fmt::print("exact references for {}x{}, max radius {} px: {:.2f} s (cache: {})\n", scene.color.width,
-             scene.color.height, max_radius_px,
+  fmt::print("exact references for {}x{}, max radius {} px, aperture {}: {:.2f} s (cache: {})\n", scene.color.width,
+             scene.color.height, max_radius_px, lens.aperture.name(),
              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
              cache.directory().string());
   return refs;

@@ -116,6 +116,7 @@ std::string point_id(const SweepPoint& p) {
                                o.pattern.size_n, o.pattern.spacing_px, o.precision);
   if (o.buffer_scale != 1) id += fmt::format("/scale:1-{}", o.buffer_scale);
   if (p.max_coc_px != o.pattern.max_radius_px()) id += fmt::format("/coc:{}", p.max_coc_px);
+  if (!o.aperture.is_disc()) id += "/aperture:" + o.aperture.name();  // disc points keep their ids
   return id + p.variant;
 }
 
@@ -126,9 +127,11 @@ std::vector<SweepPoint> expand(const Axes& axes) {
   const std::vector<std::optional<double>> cocs =
       axes.max_coc_px.empty() ? std::vector<std::optional<double>>{std::nullopt}
                               : std::vector<std::optional<double>>(axes.max_coc_px.begin(), axes.max_coc_px.end());
+  const std::vector<Aperture> apertures = axes.apertures.empty() ? std::vector<Aperture>{Aperture{}} : axes.apertures;
   for (const auto& coc : cocs) {
     if (coc && !(*coc > 0 && std::isfinite(*coc)))
       throw std::invalid_argument(fmt::format("--max-coc {} must be a number of pixels > 0", *coc));
+    for (const auto& aperture : apertures)
     for (const auto& scene : axes.scenes)
       for (const auto& res : axes.resolutions)
         for (const auto& name : axes.methods) {
@@ -156,6 +159,7 @@ std::vector<SweepPoint> expand(const Axes& axes) {
                     p.options.precision = precision;
                     p.options.buffer_scale = scale;
                     p.options.values = values;
+                    p.options.aperture = aperture;
                     p.max_coc_px = coc.value_or(pattern.max_radius_px());
                     p.variant = variant_of(p);
                     p.id = point_id(p);
@@ -209,7 +213,8 @@ nlohmann::json identity_json(const SweepPoint& p) {
           {"buffer_scale", o.buffer_scale},
           {"options", p.method->options_json(o)},
           {"variant", p.variant},
-          {"max_coc_px", p.max_coc_px}};
+          {"max_coc_px", p.max_coc_px},
+          {"aperture", aperture_json(o.aperture)}};
 }
 
 // The one serialisation of a measured point.
@@ -331,7 +336,8 @@ class AccuracyOfPoints {
     const Scene& scene = targets_.scene(p);
     const Lens lens = targets_.lens(p);
     const float clamp = p.options.pattern.max_radius_px();
-    const std::string key = fmt::format("{}/{}/{}/{}", p.scene, p.resolution.text(), p.max_coc_px, clamp);
+    const std::string key =
+        fmt::format("{}/{}/{}/{}/{}", p.scene, p.resolution.text(), p.max_coc_px, clamp, p.options.aperture.name());
     auto it = exact_.find(key);
     if (it == exact_.end()) it = exact_.emplace(key, exact_references(scene, lens, clamp, cache_)).first;
     nlohmann::json error = error_json(output, it->second);

@@ -50,6 +50,9 @@ struct Axes {
   // The scene's largest CoC radius: empty = the pattern's max radius (the lens follows N, as in
   // figure9), else each of these many px (an axis, outermost).
   std::vector<double> max_coc_px;  // a point id names it (/coc:R) when it differs from the pattern's
+  // The lens's aperture (issue 23): empty = the disc; a point id names any other (/aperture:blades6).
+  // Methods that cannot draw one are skipped with their reason (Method::aperture_unsupported).
+  std::vector<Aperture> apertures;
 };
 
 struct SweepPoint {

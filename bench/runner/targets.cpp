@@ -156,7 +156,9 @@ const Scene& SweepTargets::scene(const SweepPoint& p) {
 
 Lens SweepTargets::lens(const SweepPoint& p) {
   const Scene& s = scene(p);
-  return with_max_coc_radius(s.lens, s.depth_m, p.max_coc_px);
+  Lens lens = with_max_coc_radius(s.lens, s.depth_m, p.max_coc_px);
+  lens.aperture = p.options.aperture;
+  return lens;
 }
 
 std::unique_ptr<runner::Target> SweepTargets::prepare(std::size_t i) {

@@ -85,8 +85,16 @@ nlohmann::json Method::options_json(const FilterOptions& o) const {
   return out;
 }
 
+std::string aperture_unsupported(const Method& method, const FilterOptions& options) {
+  if (method.aperture_unsupported) return method.aperture_unsupported(options);
+  if (options.aperture.is_disc()) return "";
+  return fmt::format("{} draws the disc only, not the aperture {}", method.name, options.aperture.name());
+}
+
 void check_options(const Method& method, const FilterOptions& options) {
   validate(options.pattern);
+  validate(options.aperture);
+  if (const std::string why = aperture_unsupported(method, options); !why.empty()) throw std::invalid_argument(why);
   const auto& precisions = method.precisions;
   if (std::find(precisions.begin(), precisions.end(), options.precision) == precisions.end())
     throw std::invalid_argument(fmt::format("method '{}' does not store intermediates as '{}' (it accepts: {})",

@@ -44,6 +44,9 @@ struct FilterOptions {
   std::string precision;                 // one of Method::precisions
   int buffer_scale = 1;                  // one of Method::buffer_scales
   std::map<std::string, double> values;  // the method's own options (OptionSpec::key), every one present
+  // The lens's aperture (Lens::aperture), which the method is asked to draw: run_cpu and run_gpu refuse
+  // a lens whose aperture differs, so the two never disagree.
+  Aperture aperture;
 
   double number(const std::string& key) const;  // throws std::logic_error if the method has no such option
   int integer(const std::string& key) const { return static_cast<int>(number(key)); }
@@ -94,6 +97,9 @@ struct Method {
   // What this configuration needs of a device (null: core Vulkan 1.1 compute only).
   std::function<vk::DeviceRequirements(const FilterOptions&)> device;
 
+  // Why this method cannot draw options.aperture (empty: it can); null: the disc only. Checked first
+  // (check_options, plan_frame): a sweep skips the point with this reason.
+  std::function<std::string(const FilterOptions&)> aperture_unsupported;
   // Why this configuration cannot run at this size (empty: it can); checked before allocating.
   std::function<std::string(const FilterOptions&, int width_px, int height_px)> unsupported;
   std::function<Image(const CpuInput&)> cpu_reference;
@@ -129,8 +135,11 @@ struct Method {
 const std::vector<Method>& registered_methods();
 // Throws std::invalid_argument listing the valid names.
 const Method& find_method(const std::string& name);
+// Why `method` cannot draw options.aperture ("" when it can): Method::aperture_unsupported, or for a
+// method that declares none, that it draws the disc only.
+std::string aperture_unsupported(const Method& method, const FilterOptions& options);
 // Throws std::invalid_argument unless the method accepts the options' pattern, precision, buffer
-// scale and option values; lists what it accepts.
+// scale, option values and aperture; lists what it accepts.
 void check_options(const Method& method, const FilterOptions& options);
 
 }  // namespace bokeh

@@ -14,6 +14,13 @@ namespace bokeh {
 
 namespace {
 
+// The lens is what the user gave; the options carry its aperture to the method. They must agree.
+void check_aperture(const Lens& lens, const FilterOptions& options) {
+  if (!(lens.aperture == options.aperture))
+    throw std::invalid_argument(fmt::format("the lens's aperture is {} but the method was asked for {}",
+                                            lens.aperture.name(), options.aperture.name()));
+}
+
 std::string mib(double bytes) { return fmt::format("{:.1f} MiB", bytes / (1024.0 * 1024.0)); }
 
 std::uint64_t physical_memory_bytes() {
@@ -47,6 +54,7 @@ CocInput cpu_coc_pass(const Image& color, const Image& depth_m, const Lens& lens
 Image run_cpu(const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
               const FilterOptions& options, int threads, nlohmann::json* stats) {
   check_options(method, options);
+  check_aperture(lens, options);
   const CocInput coc = cpu_coc_pass(color, depth_m, lens, options.pattern, threads);
   if (stats) *stats = nlohmann::json::object();
   try {
@@ -61,6 +69,7 @@ Image run_cpu(const Method& method, const Image& color, const Image& depth_m, co
 Image run_gpu(vk::Context& ctx, const Method& method, const Image& color, const Image& depth_m, const Lens& lens,
               const FilterOptions& options, std::vector<vk::PassTime>* pass_times, nlohmann::json* stats) {
   check_options(method, options);
+  check_aperture(lens, options);
   if (const std::string missing = ctx.unmet(method.needs(options)); !missing.empty())
     throw std::runtime_error(method.name + " needs " + missing + ", which " + ctx.info().name + " lacks");
   check_color(color);
@@ -77,6 +86,7 @@ Image run_gpu(vk::Context& ctx, const Method& method, const Image& color, const 
 
 std::string plan_frame(vk::Context* ctx, const Method& m, const FilterOptions& o, int w, int h,
                        double max_intermediate_mib, FramePlan& plan) {
+  if (std::string why = aperture_unsupported(m, o); !why.empty()) return why;
   check_options(m, o);
   const auto pixels = static_cast<std::uint64_t>(w) * static_cast<std::uint64_t>(h);
   // Host images every run holds: colour (12 B/px), depth (4), CoC radius (4), packed input (16), output (12).

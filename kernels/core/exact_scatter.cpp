@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <type_traits>
 #include <stdexcept>
 #include <unordered_map>
 #include <vector>
@@ -113,27 +114,211 @@ DiscStencil make_disc_stencil(float radius_px) {
   return st;
 }
 
+
+// ---- Any aperture (aperture.hpp): exact coverage of a pixel square by a convex shape ------------------
+// The square is clipped against each edge of the (possibly enlarged) polygon, Sutherland-Hodgman: the
+// result is convex, its area the shoelace sum. Curved blades intersect that with the disc: the area of
+// a convex polygon inside a disc centred on the origin is the sum over its edges of the signed area of
+// the triangle (origin, edge) inside the disc, each a triangle or a circular sector piece by piece.
+using Point = std::pair<double, double>;
+
+double cross(const Point& a, const Point& b) { return a.first * b.second - a.second * b.first; }
+
+// Keeps the part of `poly` with n.p <= d.
+std::vector<Point> clip_half_plane(const std::vector<Point>& poly, double nx, double ny, double d) {
+  std::vector<Point> out;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Point& p = poly[i];
+    const Point& q = poly[(i + 1) % poly.size()];
+    const double fp = nx * p.first + ny * p.second - d, fq = nx * q.first + ny * q.second - d;
+    if (fp <= 0) out.push_back(p);
+    if ((fp < 0 && fq > 0) || (fp > 0 && fq < 0)) {
+      const double t = fp / (fp - fq);
+      out.emplace_back(p.first + t * (q.first - p.first), p.second + t * (q.second - p.second));
+    }
+  }
+  return out;
+}
+
+// Signed area of (triangle origin, a, b) inside the disc of radius r centred on the origin.
+double triangle_in_disc(const Point& a, const Point& b, double r) {
+  const double dx = b.first - a.first, dy = b.second - a.second;
+  const double qa = dx * dx + dy * dy, qb = 2 * (a.first * dx + a.second * dy),
+               qc = a.first * a.first + a.second * a.second - r * r;
+  std::vector<double> cuts = {0.0};
+  const double disc = qb * qb - 4 * qa * qc;
+  if (qa > 0 && disc > 0) {
+    const double root = std::sqrt(disc);
+    for (double t : {(-qb - root) / (2 * qa), (-qb + root) / (2 * qa)})
+      if (t > 0 && t < 1) cuts.push_back(t);
+  }
+  cuts.push_back(1.0);
+  double area = 0;
+  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+    const Point p{a.first + cuts[i] * dx, a.second + cuts[i] * dy}, q{a.first + cuts[i + 1] * dx, a.second + cuts[i + 1] * dy};
+    // A piece lies wholly inside or outside. Its midpoint decides, except where the edge only touches
+    // the circle (no crossing): the midpoint is then on it, and the piece outside unless its ends are in.
+    const double tm = 0.5 * (cuts[i] + cuts[i + 1]);
+    const double mx = a.first + tm * dx, my = a.second + tm * dy;
+    const bool ends_inside = std::max(p.first * p.first + p.second * p.second, q.first * q.first + q.second * q.second) <=
+                             r * r * (1 + 1e-12);
+    if (cuts.size() == 2 ? ends_inside : mx * mx + my * my <= r * r)
+      area += 0.5 * cross(p, q);  // the piece lies inside: a triangle
+    else
+      area += 0.5 * r * r * std::atan2(cross(p, q), p.first * q.first + p.second * q.second);  // a sector
+  }
+  return area;
+}
+
+// Area of the shape of radius r (centred on the origin) inside [x0, x0+1] x [y0, y0+1].
+double shape_square_coverage(const Aperture& aperture, const std::vector<Point>& polygon, double r, double x0,
+                             double y0) {
+  std::vector<Point> poly = {{x0, y0}, {x0 + 1, y0}, {x0 + 1, y0 + 1}, {x0, y0 + 1}};
+  for (std::size_t k = 0; k < polygon.size() && !poly.empty(); ++k) {
+    const Point& p = polygon[k];
+    const Point& q = polygon[(k + 1) % polygon.size()];
+    double nx = -(q.second - p.second), ny = q.first - p.first, d = nx * p.first + ny * p.second;
+    if (d < 0) nx = -nx, ny = -ny, d = -d;  // outward: the centre lies inside
+    poly = clip_half_plane(poly, nx, ny, d);
+  }
+  if (poly.size() < 3) return 0.0;
+  double area = 0;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Point& a = poly[i];
+    const Point& b = poly[(i + 1) % poly.size()];
+    area += aperture.curvature > 0 ? triangle_in_disc(a, b, r) : 0.5 * cross(a, b);
+  }
+  return std::abs(area);
+}
+
+// The coverages of one radius of a shape that need not be symmetric: per row dy in [-reach, reach] the
+// overlapped run of columns [first_dx, first_dx + count) and their coverages.
+struct ShapeStencil {
+  int reach = 0;
+  std::vector<int> first_dx, begin;  // per row (begin: + 1 sentinel) into coverage
+  std::vector<double> coverage;
+  double area = 1.0;
+};
+
+// The shape's horizontal extent on the line at height y: [first, second], empty when first > second.
+std::pair<double, double> extent_at(const Aperture& aperture, const std::vector<Point>& polygon, double r, double y) {
+  double left = 1e300, right = -1e300;
+  for (std::size_t k = 0; k < polygon.size(); ++k) {
+    const Point& p = polygon[k];
+    const Point& q = polygon[(k + 1) % polygon.size()];
+    if (y < std::min(p.second, q.second) || y > std::max(p.second, q.second)) continue;
+    const double x = p.second == q.second ? p.first : p.first + (y - p.second) / (q.second - p.second) * (q.first - p.first);
+    const double x_other = p.second == q.second ? q.first : x;
+    left = std::min({left, x, x_other}), right = std::max({right, x, x_other});
+  }
+  if (aperture.curvature > 0) {
+    if (std::abs(y) > r) return {1, -1};
+    const double half = std::sqrt(r * r - y * y);
+    left = std::max(left, -half), right = std::min(right, half);
+  }
+  return {left, right};
+}
+
+// A superset of the shape's horizontal extent within the strip y0 <= y <= y1: the polygon's vertices
+// inside the strip and its crossings of the strip's edges (for curved blades, within the disc's).
+std::pair<double, double> extent_over(const Aperture& aperture, const std::vector<Point>& polygon, double r,
+                                      double y0, double y1) {
+  double left = 1e300, right = -1e300;
+  for (const double y : {y0, y1}) {
+    const auto [l, rt] = extent_at(Aperture{aperture.blades, aperture.rotation_deg, 0.0}, polygon, r, y);
+    if (l <= rt) left = std::min(left, l), right = std::max(right, rt);
+  }
+  for (const Point& v : polygon)
+    if (v.second >= y0 && v.second <= y1) left = std::min(left, v.first), right = std::max(right, v.first);
+  if (aperture.curvature > 0) {
+    const double nearest = y0 <= 0 && y1 >= 0 ? 0.0 : std::min(std::abs(y0), std::abs(y1));
+    if (nearest > r) return {1, -1};
+    const double half = std::sqrt(r * r - nearest * nearest);
+    left = std::max(left, -half), right = std::min(right, half);
+  }
+  return {left, right};
+}
+
+ShapeStencil make_shape_stencil(const Aperture& aperture, float radius_px) {
+  ShapeStencil st;
+  st.reach = reach_of(radius_px);  // the shape lies within its circumscribed disc
+  st.begin.push_back(0);
+  if (radius_px <= 0.5f) {  // inside its own pixel: the identity, as for the disc
+    st.first_dx.push_back(0);
+    st.coverage.push_back(1.0);
+    st.begin.push_back(1);
+    return st;
+  }
+  const double r = radius_px;
+  const std::vector<Point> polygon = aperture.polygon(r);
+  double area = 0;
+  std::vector<double> row(2 * st.reach + 1);
+  for (int dy = -st.reach; dy <= st.reach; ++dy) {
+    // Per row only the squares the shape's edge crosses are clipped (O(r) a stencil, not O(r^2)): a
+    // convex shape holds a square exactly when it holds the square's top and bottom edges, i.e. when
+    // [dx - 0.5, dx + 0.5] lies within its extents on both lines; outside the strip's extent it holds none.
+    const double y0 = dy - 0.5, y1 = dy + 0.5;
+    const auto top = extent_at(aperture, polygon, r, y0), bottom = extent_at(aperture, polygon, r, y1);
+    const double inner_left = std::max(top.first, bottom.first), inner_right = std::min(top.second, bottom.second);
+    const auto outer = extent_over(aperture, polygon, r, y0, y1);
+    int first = 0, last = -1;  // an empty run until something overlaps (dx itself may be negative)
+    for (int dx = -st.reach; dx <= st.reach; ++dx) {
+      const double x0 = dx - 0.5, x1 = dx + 0.5;
+      double c = 0.0;
+      if (x0 >= inner_left && x1 <= inner_right) c = 1.0;
+      else if (x1 > outer.first && x0 < outer.second) c = shape_square_coverage(aperture, polygon, r, x0, y0);
+      row[dx + st.reach] = c;
+      if (c > 0) {
+        if (last < first) first = dx;
+        last = dx;
+      }
+    }
+    st.first_dx.push_back(first);
+    if (last >= first)
+      for (int dx = first; dx <= last; ++dx) st.coverage.push_back(row[dx + st.reach]), area += row[dx + st.reach];
+    st.begin.push_back(static_cast<int>(st.coverage.size()));
+  }
+  st.area = area;
+  return st;
+}
+
+template <class Add>
+void for_each_overlapped_pixel_in_row(const ShapeStencil& st, int dy, int cx, int width, Add&& add) {
+  const int row = dy + st.reach, begin = st.begin[row], count = st.begin[row + 1] - begin;
+  for (int i = 0; i < count; ++i) {
+    const int x = cx + st.first_dx[row] + i;
+    if (x >= 0 && x < width) add(x, st.coverage[begin + i]);
+  }
+}
+
 // Stencils by radius for one band of work: scenes repeat radii (one per surface depth), so most
 // lookups hit; the map is emptied when it grows, which bounds memory for smoothly varying depth.
+template <class Stencil>
 class StencilCache {
  public:
-  const DiscStencil& get(float radius_px) {
+  explicit StencilCache(const Aperture& aperture) : aperture_(aperture) {}
+  const Stencil& get(float radius_px) {
     const auto key = std::bit_cast<std::uint32_t>(radius_px);
     if (auto it = stencils_.find(key); it != stencils_.end()) return it->second;
     if (stencils_.size() >= kCapacity) stencils_.clear();
-    return stencils_.emplace(key, make_disc_stencil(radius_px)).first->second;
+    return stencils_.emplace(key, make(radius_px)).first->second;
   }
 
  private:
+  Stencil make(float radius_px) const {
+    if constexpr (std::is_same_v<Stencil, DiscStencil>) return make_disc_stencil(radius_px);
+    else return make_shape_stencil(aperture_, radius_px);
+  }
   static constexpr std::size_t kCapacity = 256;
-  std::unordered_map<std::uint32_t, DiscStencil> stencils_;
+  Aperture aperture_;
+  std::unordered_map<std::uint32_t, Stencil> stencils_;
 };
 
-// Calls add(x, coverage) for every in-image pixel of the row dy_abs above (or below) the disc's centre
-// pixel cx that the disc overlaps. The disc is symmetric, so this lists both the targets a source at cx
-// reaches and the sources (of this radius) that reach a target at cx.
+// Calls add(x, coverage) for every in-image pixel of the row dy below the shape's centre pixel cx
+// (above for dy < 0) that the shape overlaps: the targets a source at cx reaches on that row.
 template <class Add>
-void for_each_overlapped_pixel_in_row(const DiscStencil& st, int dy_abs, int cx, int width, Add&& add) {
+void for_each_overlapped_pixel_in_row(const DiscStencil& st, int dy, int cx, int width, Add&& add) {
+  const int dy_abs = std::abs(dy);  // the disc is symmetric
   const int inner = st.inner[dy_abs];
   for (int x = std::max(cx - inner, 0), end = std::min(cx + inner, width - 1); x <= end; ++x) add(x, 1.0);
   const int begin = st.edge_begin[dy_abs], count = st.edge_begin[dy_abs + 1] - begin;
@@ -176,7 +361,9 @@ struct Bands {
 };
 
 // Both modes write out[(y * width + x) * 3 + k], which the caller sized; each band writes only its rows.
-void scatter_energy_sum(const Image& color, const Image& radius_px, int threads, std::vector<double>& out) {
+template <class Stencil>
+void scatter_energy_sum(const Image& color, const Image& radius_px, const Aperture& aperture, int threads,
+                        std::vector<double>& out) {
   const int w = color.width, h = color.height;
   const float max_radius = *std::max_element(radius_px.pixels.begin(), radius_px.pixels.end());
   const int max_reach = reach_of(max_radius);
@@ -184,7 +371,7 @@ void scatter_energy_sum(const Image& color, const Image& radius_px, int threads,
   parallel_rows(bands.count, threads, [&](int band) {
     const int y0 = band * bands.height_px, y1 = std::min(h, y0 + bands.height_px);
     double* sum = out.data() + static_cast<std::size_t>(y0) * w * 3;
-    StencilCache stencils;
+    StencilCache<Stencil> stencils(aperture);
     for (int sy = std::max(0, y0 - max_reach); sy < std::min(h, y1 + max_reach); ++sy)
       for (int sx = 0; sx < w; ++sx) {
         const float r = *radius_px.px(sx, sy);
@@ -192,11 +379,11 @@ void scatter_energy_sum(const Image& color, const Image& radius_px, int threads,
         if (sy + reach < y0 || sy - reach >= y1) continue;
         const float* c = color.px(sx, sy);
         if (c[0] == 0.0f && c[1] == 0.0f && c[2] == 0.0f) continue;  // adds nothing
-        const DiscStencil& st = stencils.get(r);
+        const Stencil& st = stencils.get(r);
         const double scale[3] = {c[0] / st.area, c[1] / st.area, c[2] / st.area};
         for (int ty = std::max(y0, sy - reach); ty < std::min(y1, sy + reach + 1); ++ty) {
           double* row = sum + static_cast<std::size_t>(ty - y0) * w * 3;
-          for_each_overlapped_pixel_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
+          for_each_overlapped_pixel_in_row(st, ty - sy, sx, w, [&](int tx, double coverage) {
             double* t = row + 3 * tx;
             for (int k = 0; k < 3; ++k) t[k] += coverage * scale[k];
           });
@@ -205,8 +392,9 @@ void scatter_energy_sum(const Image& color, const Image& radius_px, int threads,
   });
 }
 
-void scatter_depth_ordered(const Image& color, const Image& radius_px, const Image& depth_m, int threads,
-                           std::vector<double>& out) {
+template <class Stencil>
+void scatter_depth_ordered(const Image& color, const Image& radius_px, const Image& depth_m, const Aperture& aperture,
+                           int threads, std::vector<double>& out) {
   // Views this close to full count as full: spares the hidden-surface pass the rounding residue of
   // interiors, whose shares sum to 1 only up to rounding.
   constexpr double kFullView = 1.0 - 1e-9;
@@ -223,7 +411,7 @@ void scatter_depth_ordered(const Image& color, const Image& radius_px, const Ima
     std::vector<double> rgb(band_px * 3, 0.0), alpha(band_px, 0.0);
     std::vector<double> layer_rgb(band_px * 3, 0.0), layer_weight(band_px, 0.0);
     std::vector<std::size_t> touched;  // band pixels the current layer reached
-    StencilCache stencils;
+    StencilCache<Stencil> stencils(aperture);
     for (std::size_t first = 0; first < order.size();) {
       const float layer_depth = depth_m.pixels[order[first]];
       std::size_t end = first;
@@ -232,11 +420,11 @@ void scatter_depth_ordered(const Image& color, const Image& radius_px, const Ima
         const float r = *radius_px.px(sx, sy);
         const int reach = reach_of(r);
         if (sy + reach < y0 || sy - reach >= y1) continue;
-        const DiscStencil& st = stencils.get(r);
+        const Stencil& st = stencils.get(r);
         const float* c = color.px(sx, sy);
         for (int ty = std::max(y0, sy - reach); ty < std::min(y1, sy + reach + 1); ++ty) {
           const std::size_t row = static_cast<std::size_t>(ty - y0) * w;
-          for_each_overlapped_pixel_in_row(st, std::abs(ty - sy), sx, w, [&](int tx, double coverage) {
+          for_each_overlapped_pixel_in_row(st, ty - sy, sx, w, [&](int tx, double coverage) {
             const std::size_t t = row + tx;
             if (alpha[t] >= 1.0 || coverage <= 0.0) return;  // view already full, or a rounding-zero sliver
             if (layer_weight[t] == 0.0) touched.push_back(t);
@@ -261,10 +449,10 @@ void scatter_depth_ordered(const Image& color, const Image& radius_px, const Ima
       if (alpha[t] >= kFullView || alpha[t] <= 0.0) continue;
       const int tx = static_cast<int>(t % w), ty = y0 + static_cast<int>(t / w);
       const float own_depth = *depth_m.px(tx, ty);
-      const DiscStencil& st = stencils.get(*radius_px.px(tx, ty));
+      const Stencil& st = stencils.get(*radius_px.px(tx, ty));
       double in_image = 0.0, nearer = 0.0;
       for (int py = std::max(0, ty - st.reach); py <= std::min(h - 1, ty + st.reach); ++py)
-        for_each_overlapped_pixel_in_row(st, std::abs(py - ty), tx, w, [&](int px, double coverage) {
+        for_each_overlapped_pixel_in_row(st, py - ty, tx, w, [&](int px, double coverage) {
           in_image += coverage;
           if (*depth_m.px(px, py) < own_depth) nearer += coverage;
         });
@@ -295,27 +483,33 @@ std::string to_string(ScatterComposite mode) {
 }
 
 std::vector<double> exact_scatter_double(const Image& color, const Image& radius_px, const Image& depth_m,
-                                         ScatterComposite mode, int threads) {
+                                         ScatterComposite mode, int threads, const Aperture& aperture) {
   validate_inputs(color, radius_px, depth_m, mode);
+  validate(aperture);
   std::vector<double> out(color.pixel_count() * 3, 0.0);
   if (out.empty()) return out;
-  if (mode == ScatterComposite::energy_sum)
-    scatter_energy_sum(color, radius_px, threads, out);
+  // The disc keeps its own closed form (circular segments, symmetric stencils); other shapes clip.
+  if (mode == ScatterComposite::energy_sum && aperture.is_disc())
+    scatter_energy_sum<DiscStencil>(color, radius_px, aperture, threads, out);
+  else if (mode == ScatterComposite::energy_sum)
+    scatter_energy_sum<ShapeStencil>(color, radius_px, aperture, threads, out);
+  else if (aperture.is_disc())
+    scatter_depth_ordered<DiscStencil>(color, radius_px, depth_m, aperture, threads, out);
   else
-    scatter_depth_ordered(color, radius_px, depth_m, threads, out);
+    scatter_depth_ordered<ShapeStencil>(color, radius_px, depth_m, aperture, threads, out);
   return out;
 }
 
 Image exact_scatter(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
-                    int threads) {
-  const std::vector<double> rgb = exact_scatter_double(color, radius_px, depth_m, mode, threads);
+                    int threads, const Aperture& aperture) {
+  const std::vector<double> rgb = exact_scatter_double(color, radius_px, depth_m, mode, threads, aperture);
   Image out(color.width, color.height, 3);
   std::transform(rgb.begin(), rgb.end(), out.pixels.begin(), [](double v) { return static_cast<float>(v); });
   return out;
 }
 
 std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, const Image& depth_m,
-                                ScatterComposite mode) {
+                                ScatterComposite mode, const Aperture& aperture) {
   std::uint64_t hash = 14695981039346656037ull;
   fnv1a(hash, kAlgorithmVersion.data(), kAlgorithmVersion.size());
   fnv1a(hash, kCacheFormat.data(), kCacheFormat.size());
@@ -324,15 +518,20 @@ std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, cons
   fnv1a_image(hash, color);
   fnv1a_image(hash, radius_px);
   if (mode == ScatterComposite::depth_ordered) fnv1a_image(hash, depth_m);
+  if (!aperture.is_disc()) {  // the disc hashes as before, so existing cache entries stay valid
+    const std::string shape = aperture.name();
+    fnv1a(hash, shape.data(), shape.size());
+  }
   return hash;
 }
 
 ExactReferenceCache::ExactReferenceCache(std::filesystem::path directory) : directory_(std::move(directory)) {}
 
 std::filesystem::path ExactReferenceCache::path_for(const Image& color, const Image& radius_px, const Image& depth_m,
-                                                    ScatterComposite mode) const {
-  return directory_ / fmt::format("exact-{}-{}x{}-{:016x}.exr", to_string(mode), color.width, color.height,
-                                  exact_scatter_key(color, radius_px, depth_m, mode));
+                                                    ScatterComposite mode, const Aperture& aperture) const {
+  return directory_ / fmt::format("exact-{}-{}{}x{}-{:016x}.exr", to_string(mode),
+                                  aperture.is_disc() ? "" : aperture.name() + "-", color.width, color.height,
+                                  exact_scatter_key(color, radius_px, depth_m, mode, aperture));
 }
 
 namespace {
@@ -363,10 +562,10 @@ std::string check_entry(const std::filesystem::path& path, const std::string& ke
 }  // namespace
 
 Image ExactReferenceCache::get(const Image& color, const Image& radius_px, const Image& depth_m,
-                               ScatterComposite mode, int threads) {
+                               ScatterComposite mode, int threads, const Aperture& aperture) {
   validate_inputs(color, radius_px, depth_m, mode);
-  const std::filesystem::path path = path_for(color, radius_px, depth_m, mode);
-  const std::string key = fmt::format("{:016x}", exact_scatter_key(color, radius_px, depth_m, mode));
+  const std::filesystem::path path = path_for(color, radius_px, depth_m, mode, aperture);
+  const std::string key = fmt::format("{:016x}", exact_scatter_key(color, radius_px, depth_m, mode, aperture));
   std::error_code ec;
   if (std::filesystem::exists(path, ec)) {
     Image cached;
@@ -374,7 +573,7 @@ Image ExactReferenceCache::get(const Image& color, const Image& radius_px, const
     if (problem.empty()) return cached;
     fmt::print(stderr, "note: reference cache entry '{}' {}: recomputing it\n", path.string(), problem);
   }
-  Image reference = exact_scatter(color, radius_px, depth_m, mode, threads);
+  Image reference = exact_scatter(color, radius_px, depth_m, mode, threads, aperture);
   std::filesystem::create_directories(directory_);
   // Atomic (write_file_atomically): concurrent processes never read half a file.
   write_image(reference, path.string(), {{kKeyAttribute, key}, {kPixelsAttribute, pixels_hash(reference)}});

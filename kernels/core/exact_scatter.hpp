@@ -1,12 +1,17 @@
 #pragma once
 // The exact reference every filter is judged against: each pixel spreads its colour uniformly over its
 // own circle of confusion (a disc with exact area-weighted coverage at its edge), either summed
-// (energy_sum) or composited front to back in depth order (depth_ordered).
+// (energy_sum) or composited front to back in depth order (depth_ordered). Any other aperture
+// (aperture.hpp: n blades, curved blades) takes the disc's place everywhere below: its coverage of a
+// pixel is the pixel square clipped against the polygon's edges (exact up to rounding), intersected
+// with the disc for curved blades; its area is the sum of its coverages (n R^2 sin(2 pi / n) / 2 for
+// straight blades, which the tests hold it to). Circle of confusion radius = circumradius.
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "aperture.hpp"
 #include "image.hpp"
 #include "parallel.hpp"
 
@@ -59,18 +64,20 @@ std::string to_string(ScatterComposite mode);
 // Returns 3 channels. Throws std::invalid_argument on bad shapes or values. Cost grows with the sum of
 // disc areas: a 800x600 frame with radii up to 40 px takes seconds on two cores.
 Image exact_scatter(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
-                    int threads = default_cpu_threads());
+                    int threads = default_cpu_threads(), const Aperture& aperture = {});
 
 // The same result before rounding to float: RGB interleaved, row-major, width * height * 3 doubles.
 // For checks finer than float resolution (energy conservation to 1e-9).
 std::vector<double> exact_scatter_double(const Image& color, const Image& radius_px, const Image& depth_m,
-                                         ScatterComposite mode, int threads = default_cpu_threads());
+                                         ScatterComposite mode, int threads = default_cpu_threads(),
+                                         const Aperture& aperture = {});
 
 // FNV-1a (64 bit) over the algorithm version, the cache format, mode, shapes (the frame size) and the bytes
 // of colour and radius, and of depth for depth_ordered: the same inputs always name the same cached
-// reference. The radius is computed from the depth, the lens and the CoC clamp, so the key covers them.
+// reference. The radius is computed from the depth, the lens and the CoC clamp, so the key covers them;
+// a non-disc aperture adds its name (the disc's key is what it was before apertures existed).
 std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, const Image& depth_m,
-                                ScatterComposite mode);
+                                ScatterComposite mode, const Aperture& aperture = {});
 
 // EXR files (float, lossless) under `directory`, one per key, so sweeps compute each reference once.
 // Files are written atomically (write_file_atomically), so concurrent processes never read half a file.
@@ -84,10 +91,10 @@ class ExactReferenceCache {
   // The cached reference for these inputs, computed with exact_scatter and stored on a miss, or when the
   // stored entry is unreadable or does not verify (its key, size or pixel hash).
   Image get(const Image& color, const Image& radius_px, const Image& depth_m, ScatterComposite mode,
-            int threads = default_cpu_threads());
+            int threads = default_cpu_threads(), const Aperture& aperture = {});
 
   std::filesystem::path path_for(const Image& color, const Image& radius_px, const Image& depth_m,
-                                 ScatterComposite mode) const;
+                                 ScatterComposite mode, const Aperture& aperture = {}) const;
   const std::filesystem::path& directory() const { return directory_; }
 
  private:

@@ -22,6 +22,7 @@ void validate(const Lens& lens) {
   require(std::isfinite(lens.sensor_width_mm) && lens.sensor_width_mm > 0, "sensor_width_mm must be > 0");
   require(std::isfinite(lens.focus_distance_m) && lens.focus_distance_m * 1000.0 > lens.focal_length_mm,
           "focus_distance_m must be finite and beyond the focal length (nothing nearer can be focused)");
+  validate(lens.aperture);
 }
 
 std::string to_string(CocModel model) {
@@ -38,12 +39,12 @@ Lens load_lens_json(const std::string& path) {
   }
   if (!j.is_object())
     throw std::runtime_error(fmt::format("lens file '{}' must hold a JSON object, not {}", path, j.type_name()));
-  static const char* kFields[] = {"focal_length_mm", "f_stop", "sensor_width_mm", "focus_distance_m", "coc_model"};
+  static const char* kFields[] = {"focal_length_mm", "f_stop", "sensor_width_mm", "focus_distance_m", "coc_model", "aperture"};
   for (const auto& [key, value] : j.items())
     if (std::find(std::begin(kFields), std::end(kFields), key) == std::end(kFields))
       throw std::runtime_error(fmt::format(
           "lens file '{}': unknown field '{}' (expected focal_length_mm, f_stop, sensor_width_mm, focus_distance_m, "
-          "coc_model)",
+          "coc_model, aperture)",
           path, key));
   Lens lens;
   auto number = [&](const char* key) {
@@ -67,6 +68,7 @@ Lens load_lens_json(const std::string& path) {
     else if (model == "focal_plane_at_f") lens.model = CocModel::focal_plane_at_f;
     else throw std::runtime_error(fmt::format("lens file '{}': coc_model '{}' is not thin_lens or focal_plane_at_f", path, model));
   }
+  if (j.contains("aperture")) lens.aperture = aperture_from_json(j["aperture"], fmt::format("lens file '{}'", path));
   try {
     validate(lens);
   } catch (const std::invalid_argument& e) {

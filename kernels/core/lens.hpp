@@ -2,6 +2,8 @@
 // Thin-lens camera and the circle of confusion, FLAG paper equation (1).
 #include <string>
 
+#include "aperture.hpp"
+
 namespace bokeh {
 
 // Which image-plane distance the CoC uses. thin_lens: the true thin-lens image distance, giving
@@ -16,6 +18,7 @@ struct Lens {
   double sensor_width_mm = 36.0;
   double focus_distance_m = 3.0;
   CocModel model = CocModel::thin_lens;
+  Aperture aperture;  // the shape of every circle of confusion (a disc unless set)
 
   double aperture_diameter_mm() const { return focal_length_mm / f_stop; }
 };
@@ -23,7 +26,7 @@ struct Lens {
 // Throws std::invalid_argument naming the offending field.
 void validate(const Lens& lens);
 
-// Reads {focal_length_mm, f_stop, sensor_width_mm, focus_distance_m[, coc_model]}; throws with the
+// Reads {focal_length_mm, f_stop, sensor_width_mm, focus_distance_m[, coc_model][, aperture]}; throws with the
 // file and field named on any problem.
 Lens load_lens_json(const std::string& path);
 std::string to_string(CocModel model);

@@ -1,4 +1,5 @@
 // hexagon: the two-pass, three-rhombus hexagonal bokeh (Need for Speed: The Run); see hexagon.hpp.
+#include <cmath>
 #include <limits>
 
 #include "hexagon.hpp"
@@ -23,6 +24,18 @@ void declare_hexagon(std::vector<Method>& methods) {
                   "per-pixel CoC to k(N-1)/2 with the write-up's near/far rule and soft edge";
   m.precisions = {"f32"};
   m.samples_pattern = false;  // the blurs depend on the largest radius only
+  // Its rhombi tile a hexagon of circumradius r with vertices straight up and down (hexagon.hpp): the
+  // aperture blades6 at rotation 0 (or any multiple of 60 degrees, the same hexagon), straight blades.
+  // The disc stays accepted as before, approximated by that hexagon and scored against the disc, so
+  // the sweeps over the disc keep it; blades6 scores it against its own shape (issue 23).
+  m.aperture_unsupported = [](const FilterOptions& o) -> std::string {
+    const Aperture& a = o.aperture;
+    if (a.is_disc()) return "";
+    const double sixths = a.rotation_deg / 60.0;
+    if (a.blades == 6 && a.curvature == 0 && std::abs(sixths - std::round(sixths)) < 1e-9) return "";
+    return "hexagon draws a hexagon with a vertex up (blades6 at a rotation that is a multiple of 60 degrees, straight "
+           "blades), not the aperture " + a.name();
+  };
   m.cpu_reference = [](const CpuInput& in) {
     const Image input = signed_coc_image(in.color, in.radius_px, in.depth_m, static_cast<float>(in.lens.focus_distance_m));
     return hexagon_blur(input, taps_of(in.options), in.threads);

@@ -1,9 +1,12 @@
 // naive: the quadratic gather of the FLAG paper, section 3.1.
+#include <fmt/format.h>
+
 #include "coc_tiles_gpu.hpp"
 #include "method.hpp"
 #include "naive_config.hpp"
 #include "naive_gather.hpp"
 #include "naive_gpu.hpp"
+#include "naive_shape.hpp"
 
 namespace bokeh::methods {
 
@@ -30,7 +33,18 @@ void declare_naive(std::vector<Method>& methods) {
     needs.subgroup_arithmetic = naive_config(o).adaptive;
     return needs;
   };
+  // Any aperture (issue 23): a shape test per sample against the aperture's gauge of its offset, weights
+  // 1 / the shape's area on the pattern (naive_shape.hpp). The shape's gather is the plain one: the
+  // tile map of adaptive bounds by the disc index, and is not wired to it.
+  m.aperture_unsupported = [](const FilterOptions& o) -> std::string {
+    if (o.aperture.is_disc() || !naive_config(o).adaptive) return "";
+    return fmt::format("naive with adaptive = on draws the disc only, not the aperture {} (adaptive = off draws it)",
+                       o.aperture.name());
+  };
   m.cpu_reference = [](const CpuInput& in) {
+    if (!in.options.aperture.is_disc())
+      return naive_shape_gather(in.color, in.radius_px, ShapeLattice(in.options.aperture, in.options.pattern),
+                                in.options.pattern, in.threads);
     const NaiveConfig c = naive_config(in.options);
     if (!c.adaptive) return naive_gather(in.packed, in.options.pattern, in.threads);
     const CocTiles tiles = coc_tiles(in.packed, in.options.pattern, c.adaptive_tile_px);
@@ -47,6 +61,11 @@ void declare_naive(std::vector<Method>& methods) {
     const NaiveConfig c = naive_config(o);
     const double pixels = static_cast<double>(w) * h;
     std::vector<PassWork> work;
+    if (!o.aperture.is_disc()) {  // the weights (colour and radius in, binary search), then the gather
+      work.push_back({"shape_pack", pixels, pixels * 32, pixels * 16});
+      work.push_back({"gather", pixels * o.pattern.samples_per_pixel(), pixels * 16, pixels * 16});
+      return work;
+    }
     if (c.adaptive) {
       const int t = c.adaptive_tile_px, range = tile_reach_range(o.pattern, t);
       const double tiles = static_cast<double>((w + t - 1) / t) * ((h + t - 1) / t);
@@ -59,11 +78,18 @@ void declare_naive(std::vector<Method>& methods) {
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context*) {
     const NaiveConfig c = naive_config(o);
     MemoryUse use;
+    if (!o.aperture.is_disc()) {  // the shape-weighted colour (vec4 a pixel) and two float tables of N x N
+      const auto side = static_cast<std::uint64_t>(o.pattern.size_n);
+      use.bytes = static_cast<std::uint64_t>(w) * h * 16 + 2 * side * side * 4;
+      use.details = {{"weighted_bytes", static_cast<std::uint64_t>(w) * h * 16}, {"gauge_tables_bytes", 2 * side * side * 4}};
+      return use;
+    }
     if (c.adaptive) use.bytes = gpu::CocTilesGpu::bytes(w, h, c.adaptive_tile_px);
     use.details = {{"tile_map_bytes", use.bytes}};
     return use;
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
+    if (!o.aperture.is_disc()) return static_cast<std::uint64_t>(w) * h * 16;  // the weighted colour
     const NaiveConfig c = naive_config(o);
     if (!c.adaptive) return std::uint64_t{0};
     const auto t = static_cast<std::uint64_t>(c.adaptive_tile_px);

@@ -8,6 +8,9 @@
 //   Energy: at a constant radius with a black border wider than any kernel, the output's total equals
 //   the input's (methods that declare they conserve it), up to storage_tolerance x the largest value
 //   on every output value.
+// Apertures (issue 23): each method that declares it can draw a non-disc aperture runs every check
+// above at its defaults with each of a pentagon pointing up (not vertically symmetric), a hexagon,
+// and rotated curved blades, the lens carrying the same aperture.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -42,7 +45,8 @@ std::string choices_text(const Config& c) {
 }
 
 void PrintTo(const Config& c, std::ostream* os) {
-  *os << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale << " " << choices_text(c);
+  *os << c.method->name << " " << c.options.precision << " 1/" << c.options.buffer_scale << " " << choices_text(c)
+      << " " << c.options.aperture.name();
 }
 
 // N = 9 at k = 2: radii up to 8 px, four rows of FLAG layers, kernels of 8..11 px.
@@ -63,7 +67,19 @@ std::vector<Config> all_configs() {
             configs.push_back({&m, varied});
           }
       }
+  for (const Method& m : registered_methods())
+    for (const char* shape : {"blades5", "blades6", "blades7-rot20-curv0.5"}) {
+      FilterOptions o = m.defaults({9, 2});
+      o.aperture = parse_aperture(shape);
+      if (aperture_unsupported(m, o).empty()) configs.push_back({&m, o});
+    }
   return configs;
+}
+
+// The lens the configuration's aperture is drawn with.
+Lens with_aperture(Lens lens, const Config& c) {
+  lens.aperture = c.options.aperture;
+  return lens;
 }
 
 double max_abs(const Image& image) {
@@ -88,7 +104,7 @@ TEST_P(Conformance, GpuMatchesCpuReferenceWithinTheStatedBound) {
     SCOPED_TRACE(scene);
     const Scene s = make_scene(scene, 63, 46);  // not multiples of 4 or 8: partial blocks and workgroups
     // 1.2x: some pixels clamp at the largest radius, the rest spread below it.
-    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2);
+    const Lens lens = with_aperture(with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2), c);
     const Image cpu = run_cpu(*c.method, s.color, s.depth_m, lens, c.options, 2);
     std::vector<vk::PassTime> passes;
     const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options, &passes);
@@ -113,6 +129,7 @@ TEST_P(Conformance, RadiusZeroIsTheIdentity) {
   skip_if_device_lacks(*c.method, c.options);
   Scene s = make_scene("pillars", 64, 48);
   s.lens.f_stop = 1e12;  // a pinhole: every radius 0
+  s.lens.aperture = c.options.aperture;
   const double bound = c.method->storage_tolerance(c.options) * max_abs(s.color) + 1e-6 * max_abs(s.color);
   for (const bool gpu : {false, true}) {
     const Image out = gpu ? run_gpu(context(), *c.method, s.color, s.depth_m, s.lens, c.options)
@@ -131,7 +148,7 @@ TEST_P(Conformance, UniformImageStaysUniformAwayFromTheBorders) {
   for (std::size_t p = 0; p < color.pixel_count(); ++p)
     for (int ch = 0; ch < 3; ++ch) color.pixels[p * 3 + ch] = 1.0f + ch;
   const Image depth(w, h, 1, 10.0f);
-  const Lens lens = with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2);
+  const Lens lens = with_aperture(with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2), c);
   const double bound = (c.method->storage_tolerance(c.options) + 1e-5) * max_abs(color);
   for (const bool gpu : {false, true}) {
     const Image out = gpu ? run_gpu(context(), *c.method, color, depth, lens, c.options)
@@ -153,7 +170,7 @@ TEST_P(EnergyConservation, EnergyIsConservedAwayFromTheBorders) {
   const int w = 80, h = 64, margin = 2 * static_cast<int>(c.options.pattern.max_radius_px()) + 2;
   const Image color = random_image_in_black_border(w, h, margin, 7);
   const Image depth(w, h, 1, 10.0f);
-  const Lens lens = with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2);
+  const Lens lens = with_aperture(with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2), c);
   const double in = rgb_sum(color);
   const double bound = c.method->storage_tolerance(c.options) * max_abs(color) * color.pixels.size() / in + 1e-5;
   for (const bool gpu : {false, true}) {
@@ -169,6 +186,8 @@ std::string config_name(const ::testing::TestParamInfo<Config>& info) {
   const std::string choices = choices_text(info.param);
   if (!choices.empty()) name += "_";
   for (char ch : choices) name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+  if (!info.param.options.aperture.is_disc())
+    for (char ch : "_" + info.param.options.aperture.name()) name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
   return name;
 }
 

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "runner.hpp"
+#include "run.hpp"
 #include "sweep.hpp"
 #include "targets.hpp"
 
@@ -447,6 +448,27 @@ TEST(Axes, OptionsAreFixedWhenGivenAndSweptOnRequest) {
   ASSERT_EQ(points.size(), 1u);
   EXPECT_EQ(points[0].options.integer("near_components"), 1);
   EXPECT_NE(points[0].id.find("near_components:1"), std::string::npos) << points[0].id;
+}
+
+// Apertures (issue 23): an axis; a point names any but the disc, carries it in its options, and a
+// method that cannot draw it is planned as skipped with its reason, before anything is allocated.
+TEST(Axes, ApertureIsAnAxisAndUndrawableShapesAreSkippedWithTheReason) {
+  Axes axes;
+  axes.methods = {"naive", "flag"};
+  axes.patterns = {{9, 2}};
+  axes.apertures = {Aperture{}, parse_aperture("blades5")};
+  const auto points = expand(axes);
+  ASSERT_EQ(points.size(), 4u);
+  std::set<std::string> ids;
+  for (const auto& p : points) ids.insert(p.id);
+  EXPECT_TRUE(ids.count("naive/gpu/hoops/800x600/N:9/k:2/f32")) << "the disc's ids are unchanged";
+  EXPECT_TRUE(ids.count("naive/gpu/hoops/800x600/N:9/k:2/f32/aperture:blades5"));
+  for (const auto& p : points) {
+    FramePlan plan;
+    const std::string why = plan_frame(nullptr, *p.method, p.options, 64, 48, 0, plan);
+    const bool flag_polygon = p.method->name == "flag" && !p.options.aperture.is_disc();
+    EXPECT_EQ(why, flag_polygon ? "flag draws the disc only, not the aperture blades5" : "") << p.id;
+  }
 }
 
 TEST(Axes, MaxCocFollowsThePatternUnlessFixed) {
