@@ -100,6 +100,7 @@ void buffers(BuffersOptions& o) {
                    (*p)["flag_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_flag_f32"]));
     }
   };
+  o.sweep.apply_shard(axes);
   run_sweep(expand(axes), s);
 }
 

@@ -71,6 +71,7 @@ void tradeoff(TradeoffOptions& o) {
           fmt::print("  for {:9.2f} ms you can have at best {:>9}  ({})\n", c["frame_ms"]["median"].get<double>(),
                      psnr_text(c["error"]["vs_energy_sum"]), id.get<std::string>());
   };
+  o.sweep.apply_shard(axes);
   run_sweep(expand(axes), s);
 }
 
