@@ -58,7 +58,8 @@ std::vector<Series> series(Store& store, const std::string& point_id, Metric met
   std::vector<Series> out;
   for (const auto& [id, sweep] : ids) {
     std::map<std::string, std::vector<SeriesValue>> by_machine;
-    for (auto& v : store.series(id)) by_machine[v.machine].push_back(std::move(v));
+    for (auto& v : store.series(id))  // one sweep's runs: the same point in another sweep is another design
+      if (v.sweep == sweep) by_machine[v.machine].push_back(std::move(v));
     for (const auto& [machine, runs] : by_machine) {
       Series s{id, sweep, machine, over_commits(runs, metric), {}};
       if (s.values.empty()) continue;

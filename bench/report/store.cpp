@@ -292,7 +292,7 @@ std::vector<SeriesValue> Store::series(const std::string& point_id) {
   std::vector<SeriesValue> out;
   for (const auto& r : connection_->query(
            "SELECT r.id, r.commit_hash, r.date_utc, r.machine, r.shard, p.median_ms, p.q1_ms, p.q3_ms, p.cpu_median_ms, "
-           "s.frame_ms, s.cpu_ms FROM points p JOIN runs r ON r.id = p.run_id JOIN samples s ON s.run_id = p.run_id AND "
+           "s.frame_ms, s.cpu_ms, r.sweep FROM points p JOIN runs r ON r.id = p.run_id JOIN samples s ON s.run_id = p.run_id AND "
            "s.point_id = p.point_id WHERE p.point_id = $1 AND r.status = 'complete' ORDER BY r.date_utc, r.id",
            {point_id})) {
     SeriesValue v;
@@ -300,6 +300,7 @@ std::vector<SeriesValue> Store::series(const std::string& point_id) {
     v.commit = text(r[1]), v.date_utc = text(r[2]), v.machine = text(r[3]), v.shard = text(r[4]);
     v.median_ms = number(r[5]), v.q1_ms = number(r[6]), v.q3_ms = number(r[7]), v.cpu_median_ms = number(r[8]);
     v.samples_ms = split(text(r[9])), v.samples_cpu_ms = split(text(r[10]));
+    v.sweep = text(r[11]);
     out.push_back(std::move(v));
   }
   return out;

@@ -44,7 +44,7 @@ struct PointRow {
 // One value of a series: a run's figure for one point.
 struct SeriesValue {
   std::int64_t run_id = 0;
-  std::string commit, date_utc, machine, shard;
+  std::string commit, date_utc, machine, shard, sweep;
   double median_ms = 0, q1_ms = 0, q3_ms = 0, cpu_median_ms = 0;
   std::vector<double> samples_ms, samples_cpu_ms;
 };
@@ -74,7 +74,7 @@ class Store {
   std::int64_t append(const RunRow& run, const std::vector<PointRow>& points);
   std::vector<RunRow> runs();
   std::vector<PointRow> points(std::int64_t run_id);
-  // Every run's value for `point_id`, oldest first (by date, then id).
+  // Every complete run's value for `point_id` (of every sweep that has it), oldest first (by date, then id).
   std::vector<SeriesValue> series(const std::string& point_id);
   // The distinct point ids, with the sweep each belongs to.
   std::vector<std::pair<std::string, std::string>> point_ids();
