@@ -17,6 +17,8 @@ namespace bokeh::history {
 
 namespace {
 
+std::string shown(const std::string& url);
+
 // ---- SQLite ----------------------------------------------------------------------------------------
 
 class SqliteConnection : public Connection {
@@ -88,11 +90,11 @@ class SqliteConnection : public Connection {
 #ifdef BOKEH_HAVE_PQXX
 class PostgresConnection : public Connection {
  public:
-  explicit PostgresConnection(const std::string& url) : url_(url) {
+  explicit PostgresConnection(const std::string& url) : url_(shown(url)) {
     try {
       connection_ = std::make_unique<pqxx::connection>(url);
     } catch (const std::exception& e) {
-      throw std::runtime_error(fmt::format("cannot connect to the PostgreSQL results store '{}': {}", url, trimmed(e.what())));
+      throw std::runtime_error(fmt::format("cannot connect to the PostgreSQL results store '{}': {}", url_, trimmed(e.what())));
     }
   }
   std::vector<Row> query(const std::string& sql, const std::vector<std::string>& params = {}) override {
@@ -143,6 +145,16 @@ class PostgresConnection : public Connection {
 };
 #endif
 
+// A URL as messages show it: a password (user:PASSWORD@host) is not printed.
+std::string shown(const std::string& url) {
+  const auto scheme = url.find("://");
+  if (scheme == std::string::npos) return url;
+  const auto at = url.find('@', scheme + 3);
+  const auto colon = url.find(':', scheme + 3);
+  if (at == std::string::npos || colon == std::string::npos || colon > at) return url;
+  return url.substr(0, colon + 1) + "***" + url.substr(at);
+}
+
 double number(const std::optional<std::string>& text) { return text ? std::strtod(text->c_str(), nullptr) : 0.0; }
 std::string text(const std::optional<std::string>& t) { return t.value_or(""); }
 std::string num(double v) { return fmt::format("{:.17g}", v); }
@@ -175,7 +187,7 @@ std::unique_ptr<Store> Store::open(const std::string& url, bool create) {
 #ifdef BOKEH_HAVE_PQXX
     return std::make_unique<Store>(std::make_unique<PostgresConnection>(url), url, create);
 #else
-    throw std::runtime_error(fmt::format("results store '{}': this bokehbench was built without PostgreSQL (libpqxx-dev)", url));
+    throw std::runtime_error(fmt::format("results store '{}': this bokehbench was built without PostgreSQL (libpqxx-dev)", shown(url)));
 #endif
   }
   if (scheme_end != std::string::npos)
@@ -188,7 +200,7 @@ std::unique_ptr<Store> Store::open(const std::string& url, bool create) {
 }
 
 Store::Store(std::unique_ptr<Connection> connection, const std::string& url, bool create)
-    : connection_(std::move(connection)), url_(url) {
+    : connection_(std::move(connection)), url_(shown(url)) {
   Connection& c = *connection_;
   // The version first: a newer store is refused before anything is created or changed in it.
   auto version_of = [&]() -> std::optional<int> {
@@ -197,16 +209,16 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
                             : c.query("SELECT table_name FROM information_schema.tables WHERE table_name = 'meta'");
     if (tables.empty()) return std::nullopt;
     const auto rows = c.query("SELECT value FROM meta WHERE key = 'schema_version'");
-    if (rows.empty() || !rows[0][0]) throw std::runtime_error(fmt::format("results store '{}': no schema_version in its meta table", url));
+    if (rows.empty() || !rows[0][0]) throw std::runtime_error(fmt::format("results store '{}': no schema_version in its meta table", url_));
     return std::atoi(rows[0][0]->c_str());
   };
   std::optional<int> version = version_of();
   if (version && *version > kStoreSchemaVersion)
     throw std::runtime_error(fmt::format("results store '{}' has schema version {}, newer than this bokehbench reads ({}): "
                                          "use a newer bokehbench (nothing was changed in the store)",
-                                         url, *version, kStoreSchemaVersion));
+                                         url_, *version, kStoreSchemaVersion));
   if (version) return;
-  if (!create) throw std::runtime_error(fmt::format("'{}' is not a bokehbench results store (no meta table)", url));
+  if (!create) throw std::runtime_error(fmt::format("'{}' is not a bokehbench results store (no meta table)", url_));
   c.begin_write();
   try {
     // PostgreSQL: shards starting at once on an empty database create the tables once.
@@ -327,8 +339,14 @@ std::string machine_key(const nlohmann::json& context) {
 
 RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::string& source) {
   const std::string schema = doc.value("schema", "");
-  if (schema.rfind("bokehbench.", 0) != 0 || !doc.contains("points") || !doc["points"].is_array() || !doc.contains("context"))
-    throw std::runtime_error("not a bokehbench sweep results document (schema bokehbench.*, context, points)");
+  const bool sweep = schema.rfind("bokehbench.", 0) == 0 && doc.contains("points") && doc["points"].is_array() &&
+                     doc.contains("context") && doc["context"].is_object() &&
+                     std::all_of(doc["points"].begin(), doc["points"].end(),
+                                 [](const nlohmann::json& p) { return p.is_object() && p.contains("id"); });
+  if (!sweep)
+    throw std::runtime_error(fmt::format("not the results of a sweep (schema '{}': a sweep file has context and points with "
+                                         "ids and samples; memory, kernels and stability are not sweeps)",
+                                         schema));
   const nlohmann::json& context = doc["context"];
   RunRow run;
   run.commit = context.value("git_commit", "unknown");

@@ -195,6 +195,10 @@ TEST(StoreUrl, BadUrlsNameTheProblem) {
   EXPECT_NE(message("postgresql://nobody@127.0.0.1:1/db?connect_timeout=5", true).find("cannot connect to the PostgreSQL"),
             std::string::npos);
   EXPECT_NE(message("postgresql://[bad", true).find("PostgreSQL"), std::string::npos);
+  // A password in the URL is not printed.
+  const std::string with_password = message("postgresql://bench:secret@127.0.0.1:1/db?connect_timeout=5", true);
+  EXPECT_EQ(with_password.find("secret"), std::string::npos) << with_password;
+  EXPECT_NE(with_password.find("postgresql://bench:***@127.0.0.1:1/db"), std::string::npos) << with_password;
 #endif
 }
 
