@@ -128,8 +128,8 @@ void import_files(const HistoryOptions& o) {
   for (const auto& path : o.files) {
     const nlohmann::json doc = compare::load_results(path);
     try {
-      runs.emplace_back(history::run_of(doc, "imported", std::filesystem::path(path).filename().string()),
-                        history::points_of(doc));
+      auto run = history::run_of(doc, "imported", std::filesystem::path(path).filename().string());  // checks doc first
+      runs.emplace_back(std::move(run), history::points_of(doc));
     } catch (const std::exception& e) {
       throw std::runtime_error(fmt::format("{}: {}; nothing was imported", path, e.what()));
     }

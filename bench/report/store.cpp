@@ -364,7 +364,9 @@ RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::
 
 std::vector<PointRow> points_of(const nlohmann::json& doc) {
   std::vector<PointRow> out;
+  if (!doc.contains("points") || !doc["points"].is_array()) return out;
   for (const auto& p : doc["points"]) {
+    if (!p.is_object()) continue;
     PointRow row;
     row.point_id = p.value("id", "");
     row.method = p.value("method", "");
