@@ -284,6 +284,7 @@ void cost(const HistoryOptions& o) {
   if (sqlite && std::filesystem::exists(path))
     throw std::runtime_error(fmt::format("history cost: '{}' exists; give a new store (it is filled with synthetic runs)", o.store));
   auto store = Store::open(o.store, true);
+  const std::uint64_t empty_bytes = store->size_bytes();  // PostgreSQL's catalog, SQLite's empty tables
   std::vector<double> append_ms;
   for (int i = 0; i < o.runs; ++i) {
     run.commit = fmt::format("c{:04d}", i);
@@ -298,14 +299,12 @@ void cost(const HistoryOptions& o) {
              o.runs, points.size(), doc["points"].empty() ? 0 : doc["points"][0]["samples_ms"].size(), o.store, store->kind(),
              append_ms[append_ms.size() / 2], append_ms[append_ms.size() * 9 / 10]);
   store.reset();  // the last connection closing checkpoints SQLite's write-ahead log into the file
-  if (sqlite) {
-    std::uintmax_t bytes = 0;
-    for (const char* suffix : {"", "-wal", "-shm"})
-      if (std::filesystem::exists(path + suffix)) bytes += std::filesystem::file_size(path + suffix);
-    fmt::print("store size: {:.1f} MiB, {:.1f} MiB per 1,000 runs\n", bytes / 1048576.0, bytes / 1048576.0 * 1000 / o.runs);
-  }
-  const auto t0 = std::chrono::steady_clock::now();
   store = Store::open(o.store, false);
+  const std::uint64_t bytes = store->size_bytes();
+  const double grown_mib = (static_cast<double>(bytes) - static_cast<double>(empty_bytes)) / 1048576.0;
+  fmt::print("store size: {:.1f} MiB ({:.1f} MiB empty); the runs added {:.1f} MiB per 1,000 runs{}\n", bytes / 1048576.0,
+             empty_bytes / 1048576.0, grown_mib * 1000 / o.runs, sqlite ? "" : " (pg_database_size)");
+  const auto t0 = std::chrono::steady_clock::now();
   history::HtmlReportInput in;
   in.store_url = o.store;
   in.change_points = change_point_options(o);

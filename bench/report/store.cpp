@@ -196,11 +196,11 @@ std::unique_ptr<Store> Store::open(const std::string& url, bool create) {
                                          url, url.substr(0, scheme_end)));
   const std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
   if (path.empty()) throw std::runtime_error(fmt::format("results store '{}': no file path", url));
-  return std::make_unique<Store>(std::make_unique<SqliteConnection>(path, create), url, create);
+  return std::make_unique<Store>(std::make_unique<SqliteConnection>(path, create), url, create, path);
 }
 
-Store::Store(std::unique_ptr<Connection> connection, const std::string& url, bool create)
-    : connection_(std::move(connection)), url_(shown(url)) {
+Store::Store(std::unique_ptr<Connection> connection, const std::string& url, bool create, std::string path)
+    : connection_(std::move(connection)), url_(shown(url)), path_(std::move(path)) {
   Connection& c = *connection_;
   // The version first: a newer store is refused before anything is created or changed in it.
   auto version_of = [&]() -> std::optional<int> {
@@ -268,6 +268,15 @@ std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& point
     c.rollback();
     throw;
   }
+}
+
+std::uint64_t Store::size_bytes() {
+  if (connection_->kind() == "postgresql")
+    return static_cast<std::uint64_t>(number(connection_->query("SELECT pg_database_size(current_database())").at(0).at(0)));
+  std::uint64_t bytes = 0;
+  for (const char* suffix : {"", "-wal"})
+    if (std::filesystem::exists(path_ + suffix)) bytes += std::filesystem::file_size(path_ + suffix);
+  return bytes;
 }
 
 std::vector<RunRow> Store::runs() {

@@ -69,7 +69,7 @@ class Store {
   // server, a file that is not a store, or a store of a newer schema version.
   static std::unique_ptr<Store> open(const std::string& url, bool create);
 
-  explicit Store(std::unique_ptr<Connection> connection, const std::string& url, bool create);
+  explicit Store(std::unique_ptr<Connection> connection, const std::string& url, bool create, std::string path = "");
   // Appends one run with its points and samples in one transaction; returns its id.
   std::int64_t append(const RunRow& run, const std::vector<PointRow>& points);
   std::vector<RunRow> runs();
@@ -78,12 +78,15 @@ class Store {
   std::vector<SeriesValue> series(const std::string& point_id);
   // The distinct point ids, with the sweep each belongs to.
   std::vector<std::pair<std::string, std::string>> point_ids();
+  // What the store takes on disk: PostgreSQL's database size (its tables, indexes and their overhead);
+  // SQLite's file (call after the last writer closed, so the write-ahead log is checkpointed into it).
+  std::uint64_t size_bytes();
   std::string kind() const { return connection_->kind(); }
   const std::string& url() const { return url_; }
 
  private:
   std::unique_ptr<Connection> connection_;
-  std::string url_;
+  std::string url_, path_;  // path_: SQLite's file
 };
 
 // What identifies the machine a run was measured on: device, driver, CPU model and cores,
