@@ -47,7 +47,7 @@ void append_builds(const compare::Report& report, const AbOptions& o) {
     const auto id = store->append(history::run_of(doc, command_line(), side == 0 ? "ab baseline" : "ab candidate"),
                                   history::points_of(doc));
     fmt::print("appended the {} build's samples as run {} to the results store {}\n", side == 0 ? "baseline" : "candidate",
-               id, o.store);
+               id, store->url());
   }
 }
 
