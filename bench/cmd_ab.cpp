@@ -4,7 +4,11 @@
 // bench/ab does the same for two commits (it builds them first).
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "commands.hpp"
+#include "runner.hpp"
+#include "store.hpp"
 #include "compare.hpp"
 #include "paired.hpp"
 #include "report.hpp"
@@ -14,10 +18,38 @@ namespace bokeh {
 namespace {
 
 struct AbOptions {
-  std::string baseline, candidate, sweep = "figure9 --quick --methods all", json_out;
+  std::string baseline, candidate, sweep = "figure9 --quick --methods all", json_out, store;
   double threshold_pct = 5;
   paired::Options run;
 };
+
+// Both builds' samples into the results store, as two runs of sweep "ab-<sweep>" (their own series:
+// paired samples of CI's check are not pooled with a sweep's), each under its own commit and context.
+void append_builds(const compare::Report& report, const AbOptions& o) {
+  if (!report.mismatches.empty() || o.run.inject_slowdown_pct > 0) return;  // nothing measured, or a test
+  auto store = history::Store::open(o.store, true);
+  const std::string sweep = "ab-" + (o.run.sweep.empty() ? std::string("sweep") : o.run.sweep.front());
+  for (int side = 0; side < 2; ++side) {
+    nlohmann::json doc = {{"schema", "bokehbench." + sweep}, {"context", report.contexts[side]}, {"status", "complete"},
+                          {"points", nlohmann::json::array()}};
+    for (const auto& p : report.points) {
+      if (p.wall_ms[side].empty()) continue;
+      std::vector<double> sorted = p.wall_ms[side];
+      std::sort(sorted.begin(), sorted.end());
+      const auto at = [&](double q) { return sorted[static_cast<std::size_t>(q * (sorted.size() - 1))]; };
+      doc["points"].push_back({{"id", p.id},
+                               {"method", p.id.substr(0, p.id.find('/'))},
+                               {"backend", p.backend},
+                               {"frame_ms", {{"median", runner::quantile(p.wall_ms[side], 0.5)}, {"q1", at(0.25)}, {"q3", at(0.75)}}},
+                               {"samples_ms", p.wall_ms[side]},
+                               {"samples_cpu_ms", p.cpu_ms[side]}});
+    }
+    const auto id = store->append(history::run_of(doc, command_line(), side == 0 ? "ab baseline" : "ab candidate"),
+                                  history::points_of(doc));
+    fmt::print("appended the {} build's samples as run {} to the results store {}\n", side == 0 ? "baseline" : "candidate",
+               id, store->url());
+  }
+}
 
 void run_ab(AbOptions& o) {
   // Before any measuring: a file that cannot be written fails now, not after the pairs (and never after a verdict).
@@ -28,6 +60,7 @@ void run_ab(AbOptions& o) {
   o.run.sweep = paired::sweep_words(o.sweep);
   const compare::Report report = paired::run(o.run);
   fmt::print("\n");
+  if (!o.store.empty()) append_builds(report, o);
   report_verdicts(report, o.json_out);
 }
 
@@ -64,6 +97,8 @@ void add_ab_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("!--no-confirm", o->run.confirm,
                 "Do not measure flagged points again with fresh processes (one process's memory layout can slow a point)");
+  cmd->add_option("--store", o->store, "Also append both builds' samples to this results store (SQLite file or "
+                                       "postgresql:// URL) as two runs of sweep ab-SWEEP");
   cmd->add_option("--json", o->json_out, "Also write the comparison as JSON here (schema compare, design paired)");
   cmd->add_option("--inject-slowdown-pct", o->run.inject_slowdown_pct,
                   "Test of ab itself only: multiply the candidate's times by 1 + this / 100")

@@ -145,6 +145,7 @@ void adaptive(AdaptiveOptions& o) {
     throw std::invalid_argument("--adaptive: this command measures every method both ways; leave it out");
   axes.sweep_choices = {kOption};
   axes.max_coc_px = o.max_coc_px;
+  o.sweep.apply_shard(axes);
   const std::vector<SweepPoint> points = expand(axes);
 
   SweepSettings s = o.sweep.settings("adaptive", "plot_adaptive.py");

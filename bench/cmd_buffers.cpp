@@ -10,6 +10,7 @@
 // heap but does not enforce it. Beside the full, half and quarter buffers, the streamed layers
 // (layer_buffer = streamed, kernels/flag/flag_gpu.hpp) at full resolution, one point per --band-rows.
 #include <map>
+#include <set>
 #include <vector>
 
 #include <fmt/format.h>
@@ -157,16 +158,22 @@ void buffers(BuffersOptions& o) {
                    (*p)["flag_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_flag_f32"]));
     }
   };
+  o.sweep.apply_shard(axes);
   std::vector<SweepPoint> points = expand(axes);
-  // The streamed layers at full resolution, beside the full and reduced buffers.
+  // The streamed layers at full resolution, beside the full and reduced buffers, in the shard of the
+  // full buffer they are compared with (streamed_vs_full).
+  std::set<std::string> shard_keys;
+  for (const auto& p : points) shard_keys.insert(shard_key(p.id, p.method->name, p.variant));
   const OptionSpec* layer_buffer = flag.option("layer_buffer");
   const auto streamed = static_cast<double>(std::find(layer_buffer->choices.begin(), layer_buffer->choices.end(),
                                                       "streamed") - layer_buffer->choices.begin());
   for (int rows : o.band_rows) {
     Axes banded = axes;
     banded.scales = {1};
+    banded.shard_index = banded.shard_count = 1;
     banded.option_values = {{"layer_buffer", streamed}, {"band_rows", rows}};
-    for (auto& p : expand(banded)) points.push_back(std::move(p));
+    for (auto& p : expand(banded))
+      if (shard_keys.count(shard_key(p.id, p.method->name, p.variant))) points.push_back(std::move(p));
   }
   run_sweep(points, s);
 }

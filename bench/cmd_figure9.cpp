@@ -302,6 +302,7 @@ void figure9(Figure9Options& o) {
               {"scene_coc", "lens f-stop set per N so the scene's largest CoC radius equals the pattern's max radius"},
               {"error", "each point's output against the exact scatter references (energy_sum: the plain sum naive and "
                         "FLAG approximate; depth_ordered: composited front to back) of the same scene and CoC"}};
+  o.sweep.apply_shard(axes);
   const std::vector<SweepPoint> points = expand(axes);
   // The methods at one N (and backend) side by side in every round: their ratio is paired.
   s.visit_together = [](const SweepPoint& p) {

@@ -94,6 +94,7 @@ void tradeoff(TradeoffOptions& o) {
                      psnr_text(c["error"]["vs_energy_sum"]), id.get<std::string>());
         }
   };
+  o.sweep.apply_shard(axes);
   run_sweep(expand(axes), s);
 }
 

@@ -7,6 +7,7 @@
 
 #include "method.hpp"
 #include "scene.hpp"
+#include "store.hpp"
 #include "sweep.hpp"
 
 namespace bokeh {
@@ -272,6 +273,15 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
                   "Test of `compare` only: every sample runs this many percent more frames than it reports, a known "
                   "slowdown of every point (recorded in the results' config)")
       ->check(CLI::Range(0, 100));
+  cmd->add_option("--shard", shard,
+                  "Measure shard i of n (1-based, e.g. 2/3): a share of the points, the points a command compares "
+                  "kept together; run every shard (each its own machine or process) and join them with "
+                  "`bokehbench merge` or read them from one --store")
+      ->capture_default_str();
+  cmd->add_option("--store", store,
+                  "Results store the run is appended to: a file (SQLite) or postgresql://user@host/db (default: "
+                  "OUT_DIR/history.sqlite)");
+  cmd->add_flag("--no-store", no_store, "Append the run to no results store");
   // Internal: how `bokehbench ab` starts the two builds it compares (answers on stdin, not for people).
   cmd->add_flag("--serve", serve, "Internal (bokehbench ab): time samples on request over stdin/stdout")->group("");
 }
@@ -292,7 +302,19 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.policy.seed = seed;
   s.policy.extra_work_fraction = inject_slowdown_pct / 100.0;
   s.serve = serve;
+  const auto [index, count] = parse_shard(shard);
+  s.shard_index = index;
+  s.shard_count = count;
+  // A worker of `ab` writes nothing; tests of `compare` (injected slowdowns) are not history.
+  if (!no_store && !serve && inject_slowdown_pct == 0) s.store_url = store.empty() ? history::default_store_url(out_dir) : store;
   return s;
+}
+
+void SweepFlags::apply_shard(Axes& axes) const {
+  const auto [index, count] = parse_shard(shard);
+  if (serve && count > 1) throw std::invalid_argument("--shard: a worker of `ab` measures every point");
+  axes.shard_index = index;
+  axes.shard_count = count;
 }
 
 std::vector<std::string> default_sweep_methods() {

@@ -16,6 +16,7 @@ struct SweepSettings;
 struct GatherPattern;
 struct Resolution;
 struct SweepFlags;
+struct Axes;
 namespace compare {
 struct Report;
 }
@@ -86,6 +87,11 @@ struct SweepFlags {
   bool plot = true;
   bool serve = false;  // a worker of `bokehbench ab` (paired.hpp)
   bool run_over_budget = false;  // run points whose one frame is estimated above the budget
+  std::string shard = "1/1";     // --shard i/n (parse_shard)
+  std::string store;             // --store URL; empty: <out_dir>/history.sqlite
+  bool no_store = false;         // --no-store: append nothing
+  // The shard as axes take it (call after parsing; throws std::invalid_argument naming --shard).
+  void apply_shard(Axes& axes) const;
   CLI::Option* budget_option = nullptr;
   void add_to(CLI::App* cmd, double default_budget_s, double default_max_buffer_mb = 0);
   SweepSettings settings(const std::string& name, const std::string& plot_script) const;
@@ -126,5 +132,8 @@ void add_selftest_compare_command(CLI::App& app);
 void add_ab_command(CLI::App& app);
 void add_stability_command(CLI::App& app);
 void add_adaptive_command(CLI::App& app);
+void add_history_command(CLI::App& app);
+void add_report_command(CLI::App& app);
+void add_merge_command(CLI::App& app);
 
 }  // namespace bokeh

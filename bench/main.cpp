@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "report.hpp"
 
 namespace {
 
@@ -24,6 +25,7 @@ int with_output_written(int code) {
 }
 
 int run(int argc, char** argv) {
+  bokeh::set_command_line(argc, argv);
   CLI::App app{"bokehbench: cost, memory and accuracy of bokeh depth-of-field filters"};
   app.require_subcommand(1);
   bokeh::add_figure9_command(app);
@@ -39,6 +41,9 @@ int run(int argc, char** argv) {
   bokeh::add_compare_command(app);
   bokeh::add_selftest_compare_command(app);
   bokeh::add_ab_command(app);
+  bokeh::add_history_command(app);
+  bokeh::add_report_command(app);
+  bokeh::add_merge_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -7,7 +7,8 @@ A small CPU-only figure9 sweep is run to completion once, then killed at random 
 and SIGKILL, interrupted by a group-wide SIGINT (sent twice at once, as `timeout -s INT` and a
 terminal do), and run twice at once into the same --out-dir. After each, every *.json file in the
 folder must parse, and figure9.json must still be a complete result: a run never replaces a complete
-result with a partial one. Bounded: about a dozen runs of a few seconds each.
+result with a partial one. The results store they all append to holds only whole runs (complete or
+interrupted), the concurrent ones included. Bounded: about a dozen runs of a few seconds each.
 """
 import json
 import os
@@ -96,7 +97,29 @@ def main(bokehbench, workdir):
     # Temporaries of writers killed mid-write are removed by the next run.
     stale = sorted(p.name for p in out_dir.glob("*.tmp.*"))
     assert not stale, f"stale temporaries left: {stale}"
+    check_store(out_dir / "history.sqlite")
     print("interruption and concurrency: every results file valid")
+
+
+def check_store(path):
+    """Every run in the results store is whole: complete or interrupted, never half-written (a killed
+    append leaves nothing), each with its points and samples; the interrupted run is there as such."""
+    import sqlite3
+    db = sqlite3.connect(path)
+    assert db.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+    runs = db.execute("SELECT id, status FROM runs").fetchall()
+    statuses = [s for _, s in runs]
+    assert set(statuses) <= {"complete", "interrupted"}, statuses
+    assert statuses.count("complete") >= 3, statuses  # the first run and the two concurrent ones
+    assert "interrupted" in statuses, statuses  # the group SIGINT's
+    for run_id, status in runs:
+        points = db.execute("SELECT COUNT(*) FROM points WHERE run_id = ?", (run_id,)).fetchone()[0]
+        samples = db.execute("SELECT COUNT(*) FROM samples WHERE run_id = ?", (run_id,)).fetchone()[0]
+        assert points == samples, (run_id, points, samples)
+        if status == "complete":
+            assert points == 2, (run_id, points)  # naive at N = 5 and 9
+    print(f"results store: {len(runs)} runs ({statuses.count('complete')} complete, "
+          f"{statuses.count('interrupted')} interrupted), each whole")
 
 
 if __name__ == "__main__":

@@ -533,6 +533,11 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
   for (const char* key : {"cpu_model", "cpu_cores", "lp_num_threads"})
     if (base_ctx.value(key, json()) != cur_ctx.value(key, json()))
       machine.push_back(fmt::format("{}: baseline {}, current {}", key, text_or(base_ctx, key), text_or(cur_ctx, key)));
+  // A file merged from shards measured on several machines (bokehbench merge) mixes machines within itself.
+  for (const auto& [which, ctx] : {std::pair<const char*, const json*>{"baseline", &base_ctx}, {"current", &cur_ctx}})
+    if (ctx->contains("shard_machines") && (*ctx)["shard_machines"].size() > 1)
+      machine.push_back(fmt::format("{}: merged from shards measured on {} machines ({})", which,
+                                    (*ctx)["shard_machines"].size(), (*ctx)["shard_machines"].dump()));
   report.notes.push_back(fmt::format("commits: baseline {} ({}), current {} ({})", text_or(base_ctx, "git_commit"),
                                      text_or(base_ctx, "date_utc"), text_or(cur_ctx, "git_commit"),
                                      text_or(cur_ctx, "date_utc")));

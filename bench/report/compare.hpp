@@ -137,6 +137,9 @@ struct PointComparison {
   std::vector<std::string> work_changes;  // "passes.horizontal.taps: 1200 -> 1500"
   // Paired design: the compared times pair by pair (taken back to back), for a second look.
   std::vector<double> paired_baseline_ms, paired_current_ms;
+  // Paired design: each side's raw samples per frame, wall and process CPU time (the results store's).
+  std::vector<double> wall_ms[2], cpu_ms[2];
+  std::string method, backend;
 };
 
 struct Report {
@@ -152,6 +155,8 @@ struct Report {
   // are not comparable at all). Two builds are compared on one machine with `bokehbench ab`.
   std::vector<std::string> machine_differences;
   std::vector<PointComparison> points;  // the points both files measured
+  // Paired design: each build's run context (its worker's hello), for the results store.
+  nlohmann::json contexts[2];
   int count(Verdict v) const;
   bool work_changed() const;
   int exit_code() const;

@@ -265,4 +265,23 @@ void write_results(const std::string& path, const std::string& schema_name, cons
   write_text_atomically(path, doc.dump(2) + "\n");
 }
 
+namespace {
+std::string& command_line_text() {
+  static std::string text;
+  return text;
+}
+}  // namespace
+
+void set_command_line(int argc, char** argv) {
+  std::string text;
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg.find_first_of(" \t\"'") != std::string::npos) arg = "'" + arg + "'";
+    text += (i ? " " : "") + arg;
+  }
+  command_line_text() = text;
+}
+
+const std::string& command_line() { return command_line_text(); }
+
 }  // namespace bokeh

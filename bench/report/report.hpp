@@ -35,6 +35,10 @@ void write_results(const std::string& path, const std::string& schema_name, cons
 // leaves the old file and no temporary. remove_stale_temporaries (same header) clears those of killed runs.
 void write_text_atomically(const std::string& path, const std::string& text);
 
+// The command line of this process (main() records it): what the results store says ran.
+void set_command_line(int argc, char** argv);
+const std::string& command_line();
+
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);
 

@@ -368,6 +368,7 @@ compare::Report describe_builds(const json hello[2], const Workers& workers, con
   report.options.rule = o.rule;
   report.options.times = o.times;
   report.options.normalise = "none";
+  for (int side = 0; side < 2; ++side) report.contexts[side] = hello[side].value("context", json::object());
   for (int side = 0; side < 2; ++side)
     if (hello[side].value("protocol", 0) != kProtocol)
       report.mismatches.push_back(fmt::format("the {} build speaks protocol {}, this one {}", workers.side[side].role(),
@@ -476,6 +477,8 @@ void add_verdicts(compare::Report& report, const std::vector<Pairing>& pairings,
     pc.work_changes = compare::json_differences(p.work[0], p.work[1]);
     pc.paired_baseline_ms = p.compared(0);
     pc.paired_current_ms = p.compared(1);
+    for (int side = 0; side < 2; ++side) pc.wall_ms[side] = p.wall_ms[side], pc.cpu_ms[side] = p.cpu_ms[side];
+    pc.backend = p.backend;
     report.points.push_back(std::move(pc));
   }
 }

@@ -20,6 +20,7 @@
 #include "report.hpp"
 #include "paired.hpp"
 #include "run.hpp"
+#include "store.hpp"
 #include "targets.hpp"
 
 namespace bokeh {
@@ -122,7 +123,45 @@ std::string point_id(const SweepPoint& p) {
 
 }  // namespace
 
+std::pair<int, int> parse_shard(const std::string& text) {
+  const auto bad = [&] {
+    return std::invalid_argument("--shard '" + text + "' is not of the form i/n with 1 <= i <= n (e.g. 2/3: the second of three)");
+  };
+  const auto slash = text.find('/');
+  if (slash == std::string::npos) throw bad();
+  auto number = [&](const std::string& part) {
+    if (part.empty() || part.size() > 6 || part.find_first_not_of("0123456789") != std::string::npos) throw bad();
+    return std::stoi(part);
+  };
+  const int index = number(text.substr(0, slash)), count = number(text.substr(slash + 1));
+  if (count < 1 || index < 1 || index > count) throw bad();
+  return {index, count};
+}
+
+std::string shard_key(const std::string& id, const std::string& method, const std::string& variant) {
+  std::string key = id.substr(0, id.size() - variant.size());
+  return key.rfind(method + "/", 0) == 0 ? key.substr(method.size() + 1) : key;
+}
+
+namespace {
+// Keeps shard `index` of `count`: the distinct shard keys, in the order expand() meets them, are dealt
+// out in turn (key g goes to shard g % count + 1), so shards get near-equal shares and together
+// every point exactly once.
+std::vector<SweepPoint> keep_shard(std::vector<SweepPoint> points, int index, int count) {
+  if (count <= 1) return points;
+  std::map<std::string, std::size_t> keys;
+  std::vector<SweepPoint> kept;
+  for (auto& p : points) {
+    const std::size_t g = keys.emplace(shard_key(p.id, p.method->name, p.variant), keys.size()).first->second;
+    if (static_cast<int>(g % count) + 1 == index) kept.push_back(std::move(p));
+  }
+  return kept;
+}
+}  // namespace
+
 std::vector<SweepPoint> expand(const Axes& axes) {
+  if (axes.shard_count < 1 || axes.shard_index < 1 || axes.shard_index > axes.shard_count)
+    throw std::invalid_argument(fmt::format("shard {}/{}: needs 1 <= i <= n", axes.shard_index, axes.shard_count));
   std::vector<SweepPoint> points;
   const std::vector<std::optional<double>> cocs =
       axes.max_coc_px.empty() ? std::vector<std::optional<double>>{std::nullopt}
@@ -168,7 +207,7 @@ std::vector<SweepPoint> expand(const Axes& axes) {
                 }
         }
   }
-  return points;
+  return keep_shard(std::move(points), axes.shard_index, axes.shard_count);
 }
 
 std::optional<vk::DeviceRequirements> gpu_requirements(const std::vector<SweepPoint>& points) {
@@ -438,6 +477,7 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
                  "samples_cpu_ms: the process CPU time (all threads) per frame over the same sample"}};
   add_probes_and_limits(measurement, measured, calibration, rec);
   nlohmann::json config = s.config;
+  if (s.shard_count > 1) config["shard"] = fmt::format("{}/{}", s.shard_index, s.shard_count);
   if (policy.extra_work_fraction > 0)  // a test of `compare`, never a real run: say so where it shows
     config["injected_slowdown_pct"] = std::lround(policy.extra_work_fraction * 100);
   return {{"status", rec.status},    {"config", config},     {"methods", methods_json(points)},
@@ -475,6 +515,22 @@ struct SweepFiles {
     gbench_partial = (dir / (name + "_gbench.partial.json")).string();
   }
 };
+
+// The run into the results store, after its JSON file is written (the file is the run's output; the
+// store its history). A store that cannot take it fails the command, naming the store.
+void append_to_store(const SweepSettings& s, const nlohmann::json& context, const nlohmann::json& body) {
+  if (s.store_url.empty()) return;
+  nlohmann::json doc = body;
+  doc["schema"] = "bokehbench." + s.name;
+  doc["context"] = context;
+  try {
+    auto store = history::Store::open(s.store_url, true);
+    const auto id = store->append(history::run_of(doc, command_line(), "run"), history::points_of(doc));
+    fmt::print("appended run {} ({}) to the results store {}\n", id, doc.value("status", ""), store->url());
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("the results file is written, but {}", e.what()));
+  }
+}
 
 }  // namespace
 
@@ -574,11 +630,13 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   write_text_atomically(complete ? files.gbench : files.gbench_partial, gbench);
   if (!complete) {
     write_results(files.partial_json, "bokehbench." + s.name, context, doc);
+    append_to_store(s, context, doc);
     throw std::runtime_error(fmt::format("interrupted after {} rounds: what was measured is in {} (earlier complete "
                                          "results, if any, are untouched)",
                                          record.round_order.size(), files.partial_json));
   }
   write_results(files.final_json, "bokehbench." + s.name, context, doc);
+  append_to_store(s, context, doc);
   std::filesystem::remove(files.partial_json);
   std::filesystem::remove(files.gbench_partial);
   if (s.summary) s.summary(doc);

@@ -53,7 +53,17 @@ struct Axes {
   // The lens's aperture (issue 23): empty = the disc; a point id names any other (/aperture:blades6).
   // Methods that cannot draw one are skipped with their reason (Method::aperture_unsupported).
   std::vector<Aperture> apertures;
+  // This process measures shard `shard_index` (1-based) of `shard_count`: expand() keeps that share of
+  // the points (shard_of), so a scheduler runs one sweep over several machines.
+  int shard_index = 1, shard_count = 1;
 };
+
+// "i/n" with 1 <= i <= n (--shard); throws std::invalid_argument naming the text.
+std::pair<int, int> parse_shard(const std::string& text);
+// What stays together in one shard: a point's id less its method and variant, so the points a
+// command compares with each other (naive and FLAG at one N, adaptive off and on) are measured on
+// one machine, in the same rounds, and no ratio mixes two machines.
+std::string shard_key(const std::string& id, const std::string& method, const std::string& variant);
 
 struct SweepPoint {
   std::string id;  // stable across runs: what results and Google Benchmark names carry
@@ -84,6 +94,10 @@ struct SweepSettings {
   // Answer a paired comparison's requests on stdin instead of running the rounds (paired.hpp).
   bool serve = false;
   nlohmann::json config = nlohmann::json::object();  // the command's own settings, recorded as they are
+  // The shard this run measures (recorded in config.shard as "i/n" when shard_count > 1).
+  int shard_index = 1, shard_count = 1;
+  // The results store the run is appended to (store.hpp); empty: none.
+  std::string store_url;
   // A further reference for some points (e.g. full-resolution f32 FLAG for `buffers`): the point's
   // error gains vs_<field>; make() runs once per distinct key.
   struct ExtraReference {

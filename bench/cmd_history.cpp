@@ -1,0 +1,383 @@
+// `bokehbench history ...`: the results store's runs, a point's series over commits per machine, the
+// change points of every series, importing results files, and the measurements of the history itself
+// (change-point detection on synthetic histories, the store's cost). `bokehbench merge`: shards into one
+// results file.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "commands.hpp"
+#include "compare.hpp"
+#include "history.hpp"
+#include "html_report.hpp"
+#include "merge.hpp"
+#include "report.hpp"
+#include "store.hpp"
+
+namespace bokeh {
+
+namespace {
+
+using history::Store;
+
+struct HistoryOptions {
+  std::string store = history::default_store_url("results");
+  std::string point, sweep, metric = "wall", json_out;
+  double max_p_value = 0.01;
+  int permutations = 999, min_segment = 3;
+  std::vector<std::string> files;
+  // evaluate
+  int commits = 30, histories = 10;
+  std::vector<std::string> steps = {"10:5", "20:10"};
+  unsigned seed = 1;
+  // cost
+  int runs = 1000;
+  std::string out_html;
+};
+
+history::ChangePointOptions change_point_options(const HistoryOptions& o) {
+  history::ChangePointOptions c;
+  c.max_p_value = o.max_p_value;
+  c.permutations = o.permutations;
+  c.min_segment = o.min_segment;
+  c.seed = o.seed;
+  return c;
+}
+
+void add_store_option(CLI::App* cmd, HistoryOptions& o) {
+  cmd->add_option("--store", o.store, "Results store: a file (SQLite) or postgresql://user@host/db")->capture_default_str();
+}
+void add_change_point_options(CLI::App* cmd, HistoryOptions& o) {
+  cmd->add_option("--max-p-value", o.max_p_value, "A change point is kept when its permutation p-value is at most this")
+      ->check(finite_number())
+      ->check(CLI::Range(1e-6, 0.5))
+      ->capture_default_str();
+  cmd->add_option("--permutations", o.permutations, "Permutations of each test")->check(CLI::Range(19, 100000))->capture_default_str();
+  cmd->add_option("--min-segment", o.min_segment, "Commits on each side of a change point, at least")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  cmd->add_option("--metric", o.metric, "wall: frame time (timestamps, wall clock); cpu: process CPU time per frame")
+      ->check(CLI::IsMember({"wall", "cpu"}))
+      ->capture_default_str();
+}
+
+void list_runs(const HistoryOptions& o) {
+  auto store = Store::open(o.store, false);
+  const auto runs = store->runs();
+  fmt::print("{} runs in {} ({})\n", runs.size(), o.store, store->kind());
+  fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {}\n", "id", "date (UTC)", "commit", "sweep", "shard",
+             "status", "points", "machine");
+  for (const auto& r : runs)
+    fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {}\n", r.id, r.date_utc, r.commit.substr(0, 14), r.sweep,
+               r.shard.empty() ? "all" : r.shard, r.status, store->points(r.id).size(), r.machine);
+}
+
+void print_series(const HistoryOptions& o) {
+  auto store = Store::open(o.store, false);
+  const auto all = history::series(*store, o.point, history::parse_metric(o.metric), change_point_options(o));
+  for (const auto& s : all) {
+    fmt::print("{} ({}), {}, on {}:\n", s.point_id, s.sweep, history::metric_name(history::parse_metric(o.metric)), s.machine);
+    fmt::print("  {:<14}  {:<20}  {:>12}  {:>23}  {:>4}\n", "commit", "date (UTC)", "median ms", "IQR ms", "runs");
+    for (std::size_t i = 0; i < s.values.size(); ++i) {
+      const auto& v = s.values[i];
+      for (const auto& st : s.steps)
+        if (st.index == i)
+          fmt::print("  ---- change point: {:+.1f}% (p {:.3f}) ----\n", (st.ratio - 1) * 100, st.p_value);
+      fmt::print("  {:<14}  {:<20}  {:>12.4f}  {:>10.4f} - {:<10.4f}  {:>4}\n", v.commit.substr(0, 14), v.date_utc, v.median_ms,
+                 v.q1_ms, v.q3_ms, v.runs);
+    }
+  }
+}
+
+void print_changes(const HistoryOptions& o) {
+  auto store = Store::open(o.store, false);
+  const auto all = history::series(*store, o.point, history::parse_metric(o.metric), change_point_options(o));
+  std::size_t with_steps = 0;
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& s : all) {
+    if (!o.sweep.empty() && s.sweep != o.sweep) continue;
+    nlohmann::json steps = nlohmann::json::array();
+    for (const auto& st : s.steps) {
+      fmt::print("{}  on {}: {:+.1f}% between {} and {} (p {:.3f}, confidence {:.1f}%), {} commits in the series\n", s.point_id,
+                 s.machine, (st.ratio - 1) * 100, st.before_commit.substr(0, 12), st.commit.substr(0, 12), st.p_value,
+                 (1 - st.p_value) * 100, s.values.size());
+      steps.push_back({{"commit", st.commit}, {"before_commit", st.before_commit}, {"ratio", st.ratio}, {"p_value", st.p_value}});
+    }
+    with_steps += !s.steps.empty();
+    out.push_back({{"point", s.point_id}, {"sweep", s.sweep}, {"machine", s.machine}, {"commits", s.values.size()}, {"steps", steps}});
+  }
+  fmt::print("{} of {} series have change points (E-divisive means, p <= {}, {} permutations, {} commits a side at least)\n",
+             with_steps, all.size(), o.max_p_value, o.permutations, o.min_segment);
+  if (!o.json_out.empty()) {
+    write_results(o.json_out, "bokehbench.history_changes", run_context(nullptr),
+                  {{"store", o.store}, {"metric", o.metric}, {"max_p_value", o.max_p_value}, {"permutations", o.permutations},
+                   {"min_segment", o.min_segment}, {"series", out}});
+    fmt::print("wrote {}\n", o.json_out);
+  }
+}
+
+// Every file is read and checked before anything is appended: a bad file leaves the store as it was.
+void import_files(const HistoryOptions& o) {
+  std::vector<std::pair<history::RunRow, std::vector<history::PointRow>>> runs;
+  for (const auto& path : o.files) {
+    const nlohmann::json doc = compare::load_results(path);
+    try {
+      auto run = history::run_of(doc, "imported", std::filesystem::path(path).filename().string());  // checks doc first
+      runs.emplace_back(std::move(run), history::points_of(doc));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(fmt::format("{}: {}; nothing was imported", path, e.what()));
+    }
+  }
+  auto store = Store::open(o.store, true);
+  std::set<std::tuple<std::string, std::string, std::string, std::string>> stored;
+  for (const auto& r : store->runs()) stored.emplace(r.sweep, r.commit, r.date_utc, r.machine);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const auto& [run, points] = runs[i];
+    if (!stored.emplace(run.sweep, run.commit, run.date_utc, run.machine).second) {
+      fmt::print("{}: already in the store ({} of {} at {}), skipped\n", o.files[i], run.sweep, run.commit, run.date_utc);
+      continue;
+    }
+    const auto id = store->append(run, points);
+    fmt::print("{}: run {} ({}, {}, {} points)\n", o.files[i], id, run.sweep, run.commit, points.size());
+  }
+}
+
+void merge_files(const HistoryOptions& o) {
+  if (o.json_out.empty()) throw std::invalid_argument("merge: --out FILE is required");
+  check_writable_file(o.json_out, o.files);
+  std::vector<nlohmann::json> docs;
+  for (const auto& f : o.files) docs.push_back(compare::load_results(f));
+  const nlohmann::json merged = merge_shards(docs, o.files);
+  write_text_atomically(o.json_out, merged.dump(2) + "\n");
+  fmt::print("merged {} shards ({} points, {} skipped, {}) into {}\n", o.files.size(), merged["points"].size(),
+             merged["skipped"].size(), merged["status"].get<std::string>(), o.json_out);
+  if (merged["context"].contains("shard_machines"))
+    fmt::print("note: the shards were measured on {} machines: {}\n", merged["context"]["shard_machines"].size(),
+               merged["context"]["shard_machines"].dump());
+}
+
+// --steps "COMMIT:PCT": a step of PCT percent at commit index COMMIT (0-based, the first commit after it).
+std::vector<std::pair<int, double>> parse_steps(const std::vector<std::string>& steps, int commits) {
+  std::vector<std::pair<int, double>> out;
+  for (const auto& s : steps) {
+    const auto colon = s.find(':');
+    try {
+      if (colon == std::string::npos) throw std::invalid_argument(s);
+      std::size_t used = 0;
+      const int at = std::stoi(s.substr(0, colon), &used);
+      const double pct = std::stod(s.substr(colon + 1));
+      if (at < 1 || at >= commits || !std::isfinite(pct) || pct <= -100) throw std::invalid_argument(s);
+      out.emplace_back(at, pct);
+    } catch (const std::exception&) {
+      throw std::invalid_argument(fmt::format("--steps '{}': COMMIT:PCT with 1 <= COMMIT < --commits ({}) and PCT > -100", s, commits));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Synthetic histories built from real runs: commit c of a point's history is a bootstrap resample of
+// the samples of one real run of that point (drawn at random), so it carries that machine's real noise
+// within and between runs; the steps multiply the samples from their commit on.
+void evaluate(const HistoryOptions& o) {
+  if (o.files.empty()) throw std::invalid_argument("history evaluate: give real runs' results files (--from)");
+  const auto steps = parse_steps(o.steps, o.commits);
+  const history::Metric metric = history::parse_metric(o.metric);
+  std::map<std::string, std::vector<std::vector<double>>> runs_of_point;  // point -> each run's samples
+  for (const auto& path : o.files) {
+    const nlohmann::json doc = compare::load_results(path);
+    for (const auto& p : history::points_of(doc)) {
+      const auto& samples = metric == history::Metric::wall ? p.samples_ms : p.samples_cpu_ms;
+      if (samples.size() >= 3) runs_of_point[p.point_id].push_back(samples);
+    }
+  }
+  if (runs_of_point.empty()) throw std::runtime_error("history evaluate: no point with 3 samples or more in the files given");
+  std::mt19937_64 rng(o.seed);
+  const auto options = change_point_options(o);
+  struct Tally {
+    int series = 0, false_points = 0, commits = 0;
+    std::vector<int> exact, near;  // per step: found at its commit; within one commit
+  };
+  Tally with_steps{0, 0, 0, std::vector<int>(steps.size(), 0), std::vector<int>(steps.size(), 0)}, aa{};
+  const auto start = std::chrono::steady_clock::now();
+  for (int h = 0; h < o.histories; ++h)
+    for (const auto& [point, runs] : runs_of_point)
+      for (int kind = 0; kind < 2; ++kind) {  // 0: with the steps, 1: A/A
+        Tally& t = kind == 0 ? with_steps : aa;
+        std::vector<history::SeriesValue> values;
+        for (int c = 0; c < o.commits; ++c) {
+          const auto& run = runs[std::uniform_int_distribution<std::size_t>(0, runs.size() - 1)(rng)];
+          double factor = 1;
+          if (kind == 0)
+            for (const auto& [at, pct] : steps)
+              if (c >= at) factor *= 1 + pct / 100;
+          history::SeriesValue v;
+          v.commit = fmt::format("c{:03d}", c);
+          for (std::size_t i = 0; i < run.size(); ++i)
+            v.samples_ms.push_back(run[std::uniform_int_distribution<std::size_t>(0, run.size() - 1)(rng)] * factor);
+          v.samples_cpu_ms = v.samples_ms;
+          values.push_back(std::move(v));
+        }
+        const auto commits = history::over_commits(values, history::Metric::wall);
+        std::vector<double> medians;
+        for (const auto& c : commits) medians.push_back(c.median_ms);
+        const auto found = history::e_divisive(medians, options);
+        ++t.series;
+        t.commits += o.commits;
+        std::vector<bool> matched(found.size(), false);
+        if (kind == 0)
+          for (std::size_t s = 0; s < steps.size(); ++s) {
+            for (std::size_t f = 0; f < found.size(); ++f)
+              if (static_cast<int>(found[f].index) == steps[s].first) ++t.exact[s], matched[f] = true;
+            for (std::size_t f = 0; f < found.size(); ++f)
+              if (std::abs(static_cast<int>(found[f].index) - steps[s].first) <= 1) {
+                ++t.near[s];
+                matched[f] = true;
+                break;
+              }
+          }
+        for (bool m : matched) t.false_points += !m;
+      }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  fmt::print("synthetic histories from {} real run file(s), {} points, {} commits each, {} histories a point "
+             "(E-divisive means, p <= {}, {} permutations, {} commits a side; {} metric); {:.1f} s\n",
+             o.files.size(), runs_of_point.size(), o.commits, o.histories, o.max_p_value, o.permutations, o.min_segment, o.metric,
+             seconds);
+  nlohmann::json step_json = nlohmann::json::array();
+  for (std::size_t s = 0; s < steps.size(); ++s) {
+    fmt::print("  step {:+.1f}% at commit {}: found at that commit in {} of {} series ({:.1f}%), within one commit in {} ({:.1f}%)\n",
+               steps[s].second, steps[s].first, with_steps.exact[s], with_steps.series, 100.0 * with_steps.exact[s] / with_steps.series,
+               with_steps.near[s], 100.0 * with_steps.near[s] / with_steps.series);
+    step_json.push_back({{"commit", steps[s].first}, {"pct", steps[s].second}, {"series", with_steps.series},
+                         {"found_at_commit", with_steps.exact[s]}, {"found_within_one", with_steps.near[s]}});
+  }
+  const double false_with = 100.0 * with_steps.false_points / with_steps.commits, false_aa = 100.0 * aa.false_points / aa.commits;
+  fmt::print("  false change points per 100 commits: {:.2f} in the histories with steps, {:.2f} in A/A histories "
+             "({} in {} A/A series)\n",
+             false_with, false_aa, aa.false_points, aa.series);
+  if (!o.json_out.empty()) {
+    write_results(o.json_out, "bokehbench.history_evaluate", run_context(nullptr),
+                  {{"files", o.files}, {"points", runs_of_point.size()}, {"commits", o.commits}, {"histories", o.histories},
+                   {"metric", o.metric}, {"max_p_value", o.max_p_value}, {"permutations", o.permutations},
+                   {"min_segment", o.min_segment}, {"seed", o.seed}, {"steps", step_json},
+                   {"false_per_100_commits_with_steps", false_with}, {"false_per_100_commits_aa", false_aa},
+                   {"aa_series", aa.series}, {"aa_false_change_points", aa.false_points}, {"elapsed_s", seconds}});
+    fmt::print("wrote {}\n", o.json_out);
+  }
+}
+
+// What the store costs: a real run appended --runs times (as commits c0001, ...), each append timed;
+// the store's size; then the HTML report over all of it, timed.
+void cost(const HistoryOptions& o) {
+  if (o.files.size() != 1) throw std::invalid_argument("history cost: give one real run's results file (--from)");
+  const nlohmann::json doc = compare::load_results(o.files[0]);
+  history::RunRow run = history::run_of(doc, "history cost", o.files[0]);
+  const auto points = history::points_of(doc);
+  const bool sqlite = o.store.find("://") == std::string::npos;
+  const std::string path = o.store.rfind("sqlite:", 0) == 0 ? o.store.substr(7) : o.store;
+  if (sqlite && std::filesystem::exists(path))
+    throw std::runtime_error(fmt::format("history cost: '{}' exists; give a new store (it is filled with synthetic runs)", o.store));
+  auto store = Store::open(o.store, true);
+  const std::uint64_t empty_bytes = store->size_bytes();  // PostgreSQL's catalog, SQLite's empty tables
+  std::vector<double> append_ms;
+  for (int i = 0; i < o.runs; ++i) {
+    run.commit = fmt::format("c{:04d}", i);
+    run.date_utc = fmt::format("2000-01-{:02d}T{:02d}:{:02d}:00Z", 1 + i / 1440, i / 60 % 24, i % 60);
+    const auto t0 = std::chrono::steady_clock::now();
+    store->append(run, points);
+    append_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  std::sort(append_ms.begin(), append_ms.end());
+  fmt::print("{} runs of {} points ({} samples in the first) appended to {} ({}): write per run median {:.2f} ms, "
+             "90th percentile {:.2f} ms\n",
+             o.runs, points.size(), doc["points"].empty() ? 0 : doc["points"][0]["samples_ms"].size(), o.store, store->kind(),
+             append_ms[append_ms.size() / 2], append_ms[append_ms.size() * 9 / 10]);
+  store.reset();  // the last connection closing checkpoints SQLite's write-ahead log into the file
+  store = Store::open(o.store, false);
+  const std::uint64_t bytes = store->size_bytes();
+  const double grown_mib = (static_cast<double>(bytes) - static_cast<double>(empty_bytes)) / 1048576.0;
+  fmt::print("store size: {:.1f} MiB ({:.1f} MiB empty); the runs added {:.1f} MiB per 1,000 runs{}\n", bytes / 1048576.0,
+             empty_bytes / 1048576.0, grown_mib * 1000 / o.runs, sqlite ? "" : " (pg_database_size)");
+  const auto t0 = std::chrono::steady_clock::now();
+  history::HtmlReportInput in;
+  in.store_url = o.store;
+  in.change_points = change_point_options(o);
+  in.runs = store->runs();
+  in.series = history::series(*store, "", history::Metric::wall, in.change_points);
+  const std::string html = history::html_report(in);
+  if (!o.out_html.empty()) write_text_atomically(o.out_html, html);
+  fmt::print("report over {} runs ({} series): {:.2f} s, {:.1f} MiB of HTML\n", in.runs.size(), in.series.size(),
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), html.size() / 1048576.0);
+}
+
+}  // namespace
+
+void add_history_command(CLI::App& app) {
+  auto o = std::make_shared<HistoryOptions>();
+  auto* cmd = app.add_subcommand("history", "The results store: runs, series over commits, change points, import");
+  cmd->require_subcommand(1);
+
+  auto* list = cmd->add_subcommand("list", "The runs in the store, oldest first");
+  add_store_option(list, *o);
+  list->callback([o] { list_runs(*o); });
+
+  auto* series = cmd->add_subcommand("series", "One point's series over commits, one per machine, with its change points");
+  add_store_option(series, *o);
+  series->add_option("--point", o->point, "The point's id (as in the results files)")->required();
+  add_change_point_options(series, *o);
+  series->callback([o] { print_series(*o); });
+
+  auto* changes = cmd->add_subcommand("changes", "The change points of every series (or one point's), the commit where "
+                                                 "each step happened, its size and p-value");
+  add_store_option(changes, *o);
+  changes->add_option("--point", o->point, "Only this point");
+  changes->add_option("--sweep", o->sweep, "Only this sweep's points (figure9, tradeoff, ...)");
+  changes->add_option("--json", o->json_out, "Also write them as JSON here");
+  add_change_point_options(changes, *o);
+  changes->callback([o] { print_changes(*o); });
+
+  auto* import = cmd->add_subcommand("import", "Append existing results files (sweeps' JSON) to the store; a run "
+                                               "already there (same sweep, commit, date, machine) is skipped");
+  add_store_option(import, *o);
+  import->add_option("files", o->files, "Results files (results/figure9.json, ...)")->required()->check(CLI::ExistingFile);
+  import->callback([o] { import_files(*o); });
+
+  auto* evaluate_cmd = cmd->add_subcommand(
+      "evaluate", "Change-point detection on synthetic histories resampled from real runs, with steps injected at "
+                  "known commits and A/A histories: how often each step is found at its commit, false change points "
+                  "per 100 commits");
+  evaluate_cmd->add_option("--from", o->files, "Real runs' results files (the same sweep)")->required()->check(CLI::ExistingFile);
+  evaluate_cmd->add_option("--commits", o->commits, "Commits a history")->check(CLI::Range(8, 10000))->capture_default_str();
+  evaluate_cmd->add_option("--histories", o->histories, "Histories a point, of each kind")->check(CLI::Range(1, 100000))->capture_default_str();
+  evaluate_cmd->add_option("--steps", o->steps, "Steps injected, COMMIT:PCT each (0-based commit: the first after the step)")
+      ->capture_default_str();
+  evaluate_cmd->add_option("--seed", o->seed, "Seed of the resampling and the permutations")->capture_default_str();
+  evaluate_cmd->add_option("--json", o->json_out, "Also write the rates as JSON here");
+  add_change_point_options(evaluate_cmd, *o);
+  evaluate_cmd->callback([o] { evaluate(*o); });
+
+  auto* cost_cmd = cmd->add_subcommand("cost", "What the store costs: one real run appended --runs times to a new store "
+                                               "(write time per run, size), then the HTML report over all of it (time)");
+  cost_cmd->add_option("--from", o->files, "One real run's results file")->required()->check(CLI::ExistingFile);
+  cost_cmd->add_option("--store", o->store, "A new store (file or postgresql:// URL) to fill")->required();
+  cost_cmd->add_option("--runs", o->runs, "Runs to append")->check(CLI::Range(1, 1000000))->capture_default_str();
+  cost_cmd->add_option("--html", o->out_html, "Also write the report here");
+  cost_cmd->callback([o] { cost(*o); });
+}
+
+void add_merge_command(CLI::App& app) {
+  auto o = std::make_shared<HistoryOptions>();
+  auto* cmd = app.add_subcommand("merge", "Join the results files of a sweep's shards (--shard i/n runs, from one "
+                                          "machine or many) into one results file that compare reads");
+  cmd->add_option("shards", o->files, "Every shard's results file (e.g. shard1/figure9.json ...)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->json_out, "The merged results file")->required();
+  cmd->callback([o] { merge_files(*o); });
+}
+
+}  // namespace bokeh

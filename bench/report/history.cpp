@@ -1,0 +1,77 @@
+#include "history.hpp"
+
+#include <algorithm>
+#include <map>
+#include <stdexcept>
+
+namespace bokeh::history {
+
+namespace {
+double quantile_of(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(pos);
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+}  // namespace
+
+Metric parse_metric(const std::string& text) {
+  if (text == "wall") return Metric::wall;
+  if (text == "cpu") return Metric::cpu;
+  throw std::invalid_argument("--metric '" + text + "': wall (frame_ms) or cpu (process CPU time per frame)");
+}
+
+const char* metric_name(Metric metric) { return metric == Metric::wall ? "wall ms per frame" : "CPU ms per frame"; }
+
+std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metric metric) {
+  std::vector<CommitValue> out;
+  std::vector<std::vector<double>> pooled;
+  std::map<std::string, std::size_t> index;
+  for (const auto& r : runs) {
+    const auto& samples = metric == Metric::wall ? r.samples_ms : r.samples_cpu_ms;
+    if (samples.empty()) continue;
+    auto [it, added] = index.emplace(r.commit, out.size());
+    if (added) {
+      out.push_back({r.commit, r.date_utc});
+      pooled.emplace_back();
+    }
+    CommitValue& c = out[it->second];
+    ++c.runs;
+    pooled[it->second].insert(pooled[it->second].end(), samples.begin(), samples.end());
+  }
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i].median_ms = quantile_of(pooled[i], 0.5);
+    out[i].q1_ms = quantile_of(pooled[i], 0.25);
+    out[i].q3_ms = quantile_of(pooled[i], 0.75);
+    out[i].samples = static_cast<int>(pooled[i].size());
+  }
+  return out;
+}
+
+std::vector<Series> series(Store& store, const std::string& point_id, Metric metric, const ChangePointOptions& options) {
+  std::vector<std::pair<std::string, std::string>> ids;
+  for (const auto& [id, sweep] : store.point_ids())
+    if (point_id.empty() || id == point_id) ids.emplace_back(id, sweep);
+  if (!point_id.empty() && ids.empty()) throw std::runtime_error("no point '" + point_id + "' in the store " + store.url());
+  std::vector<Series> out;
+  for (const auto& [id, sweep] : ids) {
+    std::map<std::string, std::vector<SeriesValue>> by_machine;
+    for (auto& v : store.series(id))  // one sweep's runs: the same point in another sweep is another design
+      if (v.sweep == sweep) by_machine[v.machine].push_back(std::move(v));
+    for (const auto& [machine, runs] : by_machine) {
+      Series s{id, sweep, machine, over_commits(runs, metric), {}};
+      if (s.values.empty()) continue;
+      std::vector<double> medians;
+      for (const auto& v : s.values) medians.push_back(v.median_ms);
+      if (std::all_of(medians.begin(), medians.end(), [](double m) { return m > 0; }))
+        for (const auto& c : e_divisive(medians, options))
+          s.steps.push_back({s.values[c.index].commit, s.values[c.index - 1].commit, c.index, c.ratio, c.p_value});
+      out.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
+}  // namespace bokeh::history

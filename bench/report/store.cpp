@@ -1,0 +1,406 @@
+#include "store.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <sqlite3.h>
+
+#ifdef BOKEH_HAVE_PQXX
+#include <pqxx/pqxx>
+#endif
+
+namespace bokeh::history {
+
+namespace {
+
+std::string shown(const std::string& url);
+
+// ---- SQLite ----------------------------------------------------------------------------------------
+
+class SqliteConnection : public Connection {
+ public:
+  SqliteConnection(const std::string& path, bool create) : path_(path) {
+    if (!create && !std::filesystem::exists(path))
+      throw std::runtime_error(fmt::format("no results store at '{}' (a sweep creates one; or give --store)", path));
+    if (create) {
+      const auto parent = std::filesystem::path(path).parent_path();
+      if (!parent.empty()) std::filesystem::create_directories(parent);
+    }
+    const int flags = SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
+    if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
+      const std::string reason = db_ ? sqlite3_errmsg(db_) : "out of memory";
+      sqlite3_close(db_);
+      throw std::runtime_error(fmt::format("cannot open results store '{}': {}", path, reason));
+    }
+    // Concurrent writers (shards, two sweeps) wait for each other instead of failing: WAL lets
+    // readers go on while one writes, and a writer waits up to 60 s for the lock.
+    sqlite3_busy_timeout(db_, 60000);
+    query("PRAGMA journal_mode=WAL");
+    query("PRAGMA synchronous=NORMAL");
+  }
+  ~SqliteConnection() override { sqlite3_close(db_); }
+
+  std::vector<Row> query(const std::string& sql, const std::vector<std::string>& params = {}) override {
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) fail("prepare", sql);
+    struct Finalize {
+      sqlite3_stmt* s;
+      ~Finalize() { sqlite3_finalize(s); }
+    } finalize{stmt};
+    for (std::size_t i = 0; i < params.size(); ++i) {
+      const int index = sqlite3_bind_parameter_index(stmt, fmt::format("${}", i + 1).c_str());
+      if (index == 0) continue;
+      if (sqlite3_bind_text(stmt, index, params[i].c_str(), -1, SQLITE_TRANSIENT) != SQLITE_OK) fail("bind", sql);
+    }
+    std::vector<Row> rows;
+    for (;;) {
+      const int rc = sqlite3_step(stmt);
+      if (rc == SQLITE_DONE) break;
+      if (rc != SQLITE_ROW) fail("run", sql);
+      Row row;
+      for (int c = 0; c < sqlite3_column_count(stmt); ++c) {
+        const auto* text = sqlite3_column_text(stmt, c);
+        row.push_back(text ? std::optional<std::string>(reinterpret_cast<const char*>(text)) : std::nullopt);
+      }
+      rows.push_back(std::move(row));
+    }
+    return rows;
+  }
+  void begin_write() override { query("BEGIN IMMEDIATE"); }
+  void commit() override { query("COMMIT"); }
+  void rollback() noexcept override { sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr); }
+  std::string kind() const override { return "sqlite"; }
+  std::string id_column() const override { return "INTEGER PRIMARY KEY AUTOINCREMENT"; }
+
+ private:
+  [[noreturn]] void fail(const char* what, const std::string& sql) {
+    throw std::runtime_error(fmt::format("results store '{}': cannot {} '{}': {}", path_, what, sql.substr(0, 60),
+                                         sqlite3_errmsg(db_)));
+  }
+  std::string path_;
+  sqlite3* db_ = nullptr;
+};
+
+// ---- PostgreSQL ------------------------------------------------------------------------------------
+
+#ifdef BOKEH_HAVE_PQXX
+class PostgresConnection : public Connection {
+ public:
+  explicit PostgresConnection(const std::string& url) : url_(shown(url)) {
+    try {
+      connection_ = std::make_unique<pqxx::connection>(url);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(fmt::format("cannot connect to the PostgreSQL results store '{}': {}", url_, trimmed(e.what())));
+    }
+  }
+  std::vector<Row> query(const std::string& sql, const std::vector<std::string>& params = {}) override {
+    try {
+      pqxx::result result;
+      if (work_) {
+        result = work_->exec_params(sql, pqxx::prepare::make_dynamic_params(params));
+      } else {
+        pqxx::nontransaction tx(*connection_);
+        result = tx.exec_params(sql, pqxx::prepare::make_dynamic_params(params));
+      }
+      std::vector<Row> rows;
+      for (const auto& r : result) {
+        Row row;
+        for (const auto& field : r) row.push_back(field.is_null() ? std::nullopt : std::optional<std::string>(field.c_str()));
+        rows.push_back(std::move(row));
+      }
+      return rows;
+    } catch (const pqxx::sql_error& e) {
+      throw std::runtime_error(fmt::format("results store '{}': cannot run '{}': {}", url_, sql.substr(0, 60), trimmed(e.what())));
+    } catch (const pqxx::broken_connection& e) {
+      throw std::runtime_error(fmt::format("results store '{}': connection lost: {}", url_, trimmed(e.what())));
+    }
+  }
+  void begin_write() override { work_ = std::make_unique<pqxx::work>(*connection_); }
+  void commit() override {
+    work_->commit();
+    work_.reset();
+  }
+  void rollback() noexcept override {
+    try {
+      if (work_) work_->abort();
+    } catch (...) {
+    }
+    work_.reset();
+  }
+  std::string kind() const override { return "postgresql"; }
+  std::string id_column() const override { return "BIGSERIAL PRIMARY KEY"; }
+
+ private:
+  static std::string trimmed(std::string text) {
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    return text;
+  }
+  std::string url_;
+  std::unique_ptr<pqxx::connection> connection_;
+  std::unique_ptr<pqxx::work> work_;
+};
+#endif
+
+// A URL as messages show it: a password (user:PASSWORD@host) is not printed.
+std::string shown(const std::string& url) {
+  const auto scheme = url.find("://");
+  if (scheme == std::string::npos) return url;
+  const auto at = url.find('@', scheme + 3);
+  const auto colon = url.find(':', scheme + 3);
+  if (at == std::string::npos || colon == std::string::npos || colon > at) return url;
+  return url.substr(0, colon + 1) + "***" + url.substr(at);
+}
+
+double number(const std::optional<std::string>& text) { return text ? std::strtod(text->c_str(), nullptr) : 0.0; }
+std::string text(const std::optional<std::string>& t) { return t.value_or(""); }
+std::string num(double v) { return fmt::format("{:.17g}", v); }
+
+// Samples are stored as a comma-separated list in one row per point (a row per sample made a run's
+// write cost ~10x more statements for no query that needs them one by one).
+std::string join(const std::vector<double>& values) {
+  std::string out;
+  for (double v : values) out += (out.empty() ? "" : ",") + num(v);
+  return out;
+}
+std::vector<double> split(const std::string& text) {
+  std::vector<double> out;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find(',', start);
+    if (end == std::string::npos) end = text.size();
+    out.push_back(std::strtod(text.substr(start, end - start).c_str(), nullptr));
+    start = end + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::unique_ptr<Store> Store::open(const std::string& url, bool create) {
+  if (url.empty()) throw std::runtime_error("no results store given (--store PATH or postgresql://...)");
+  const auto scheme_end = url.find("://");
+  if (url.rfind("postgresql://", 0) == 0 || url.rfind("postgres://", 0) == 0) {
+#ifdef BOKEH_HAVE_PQXX
+    return std::make_unique<Store>(std::make_unique<PostgresConnection>(url), url, create);
+#else
+    throw std::runtime_error(fmt::format("results store '{}': this bokehbench was built without PostgreSQL (libpqxx-dev)", shown(url)));
+#endif
+  }
+  if (scheme_end != std::string::npos)
+    throw std::runtime_error(fmt::format("results store '{}': unknown URL scheme '{}' (a path, sqlite:PATH, or "
+                                         "postgresql://[user@]host[:port]/database)",
+                                         url, url.substr(0, scheme_end)));
+  const std::string path = url.rfind("sqlite:", 0) == 0 ? url.substr(7) : url;
+  if (path.empty()) throw std::runtime_error(fmt::format("results store '{}': no file path", url));
+  return std::make_unique<Store>(std::make_unique<SqliteConnection>(path, create), url, create, path);
+}
+
+Store::Store(std::unique_ptr<Connection> connection, const std::string& url, bool create, std::string path)
+    : connection_(std::move(connection)), url_(shown(url)), path_(std::move(path)) {
+  Connection& c = *connection_;
+  // The version first: a newer store is refused before anything is created or changed in it.
+  auto version_of = [&]() -> std::optional<int> {
+    const auto tables = c.kind() == "sqlite"
+                            ? c.query("SELECT name FROM sqlite_master WHERE type = 'table' AND name = 'meta'")
+                            : c.query("SELECT table_name FROM information_schema.tables WHERE table_name = 'meta'");
+    if (tables.empty()) return std::nullopt;
+    const auto rows = c.query("SELECT value FROM meta WHERE key = 'schema_version'");
+    if (rows.empty() || !rows[0][0]) throw std::runtime_error(fmt::format("results store '{}': no schema_version in its meta table", url_));
+    return std::atoi(rows[0][0]->c_str());
+  };
+  std::optional<int> version = version_of();
+  if (version && *version > kStoreSchemaVersion)
+    throw std::runtime_error(fmt::format("results store '{}' has schema version {}, newer than this bokehbench reads ({}): "
+                                         "use a newer bokehbench (nothing was changed in the store)",
+                                         url_, *version, kStoreSchemaVersion));
+  if (version) return;
+  if (!create) throw std::runtime_error(fmt::format("'{}' is not a bokehbench results store (no meta table)", url_));
+  c.begin_write();
+  try {
+    // PostgreSQL: shards starting at once on an empty database create the tables once.
+    if (c.kind() == "postgresql") c.query("SELECT pg_advisory_xact_lock(20201)");
+    if (!version_of()) {  // another writer may have created it meanwhile
+      c.query("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)");
+      c.query("INSERT INTO meta (key, value) VALUES ('schema_version', $1)", {std::to_string(kStoreSchemaVersion)});
+      c.query("CREATE TABLE runs (id " + c.id_column() +
+              ", commit_hash TEXT NOT NULL, date_utc TEXT NOT NULL, machine TEXT NOT NULL, sweep TEXT NOT NULL, "
+              "status TEXT NOT NULL, shard TEXT NOT NULL, command TEXT NOT NULL, source TEXT NOT NULL, "
+              "context TEXT NOT NULL)");
+      c.query("CREATE TABLE points (run_id BIGINT NOT NULL REFERENCES runs(id), point_id TEXT NOT NULL, "
+              "method TEXT NOT NULL, backend TEXT NOT NULL, median_ms DOUBLE PRECISION NOT NULL, "
+              "q1_ms DOUBLE PRECISION NOT NULL, q3_ms DOUBLE PRECISION NOT NULL, cpu_median_ms DOUBLE PRECISION NOT NULL, "
+              "settled INTEGER NOT NULL, PRIMARY KEY (run_id, point_id))");
+      c.query("CREATE TABLE samples (run_id BIGINT NOT NULL REFERENCES runs(id), point_id TEXT NOT NULL, "
+              "frame_ms TEXT NOT NULL, cpu_ms TEXT NOT NULL, PRIMARY KEY (run_id, point_id))");
+      c.query("CREATE INDEX points_by_id ON points (point_id)");
+    }
+    c.commit();
+  } catch (...) {
+    c.rollback();
+    throw;
+  }
+}
+
+std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& points) {
+  Connection& c = *connection_;
+  c.begin_write();
+  try {
+    const auto id_rows =
+        c.query("INSERT INTO runs (commit_hash, date_utc, machine, sweep, status, shard, command, source, context) "
+                "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) RETURNING id",
+                {run.commit, run.date_utc, run.machine, run.sweep, run.status, run.shard, run.command, run.source, run.context});
+    const std::string id = text(id_rows.at(0).at(0));
+    for (const auto& p : points) {
+      c.query("INSERT INTO points (run_id, point_id, method, backend, median_ms, q1_ms, q3_ms, cpu_median_ms, settled) "
+              "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
+              {id, p.point_id, p.method, p.backend, num(p.median_ms), num(p.q1_ms), num(p.q3_ms), num(p.cpu_median_ms),
+               p.settled ? "1" : "0"});
+      c.query("INSERT INTO samples (run_id, point_id, frame_ms, cpu_ms) VALUES ($1, $2, $3, $4)",
+              {id, p.point_id, join(p.samples_ms), join(p.samples_cpu_ms)});
+    }
+    c.commit();
+    return std::stoll(id);
+  } catch (...) {
+    c.rollback();
+    throw;
+  }
+}
+
+std::uint64_t Store::size_bytes() {
+  if (connection_->kind() == "postgresql")
+    return static_cast<std::uint64_t>(number(connection_->query("SELECT pg_database_size(current_database())").at(0).at(0)));
+  std::uint64_t bytes = 0;
+  for (const char* suffix : {"", "-wal"})
+    if (std::filesystem::exists(path_ + suffix)) bytes += std::filesystem::file_size(path_ + suffix);
+  return bytes;
+}
+
+std::vector<RunRow> Store::runs() {
+  std::vector<RunRow> out;
+  for (const auto& r : connection_->query("SELECT id, commit_hash, date_utc, machine, sweep, status, shard, command, source, "
+                                          "context FROM runs ORDER BY date_utc, id")) {
+    RunRow run;
+    run.id = std::stoll(text(r[0]));
+    run.commit = text(r[1]), run.date_utc = text(r[2]), run.machine = text(r[3]), run.sweep = text(r[4]);
+    run.status = text(r[5]), run.shard = text(r[6]), run.command = text(r[7]), run.source = text(r[8]), run.context = text(r[9]);
+    out.push_back(std::move(run));
+  }
+  return out;
+}
+
+std::vector<PointRow> Store::points(std::int64_t run_id) {
+  std::vector<PointRow> out;
+  for (const auto& r : connection_->query(
+           "SELECT p.point_id, p.method, p.backend, p.median_ms, p.q1_ms, p.q3_ms, p.cpu_median_ms, p.settled, s.frame_ms, "
+           "s.cpu_ms FROM points p JOIN samples s ON s.run_id = p.run_id AND s.point_id = p.point_id WHERE p.run_id = $1 "
+           "ORDER BY p.point_id",
+           {std::to_string(run_id)})) {
+    PointRow p;
+    p.point_id = text(r[0]), p.method = text(r[1]), p.backend = text(r[2]);
+    p.median_ms = number(r[3]), p.q1_ms = number(r[4]), p.q3_ms = number(r[5]), p.cpu_median_ms = number(r[6]);
+    p.settled = text(r[7]) == "1";
+    p.samples_ms = split(text(r[8])), p.samples_cpu_ms = split(text(r[9]));
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+std::vector<SeriesValue> Store::series(const std::string& point_id) {
+  std::vector<SeriesValue> out;
+  for (const auto& r : connection_->query(
+           "SELECT r.id, r.commit_hash, r.date_utc, r.machine, r.shard, p.median_ms, p.q1_ms, p.q3_ms, p.cpu_median_ms, "
+           "s.frame_ms, s.cpu_ms, r.sweep FROM points p JOIN runs r ON r.id = p.run_id JOIN samples s ON s.run_id = p.run_id AND "
+           "s.point_id = p.point_id WHERE p.point_id = $1 AND r.status = 'complete' ORDER BY r.date_utc, r.id",
+           {point_id})) {
+    SeriesValue v;
+    v.run_id = std::stoll(text(r[0]));
+    v.commit = text(r[1]), v.date_utc = text(r[2]), v.machine = text(r[3]), v.shard = text(r[4]);
+    v.median_ms = number(r[5]), v.q1_ms = number(r[6]), v.q3_ms = number(r[7]), v.cpu_median_ms = number(r[8]);
+    v.samples_ms = split(text(r[9])), v.samples_cpu_ms = split(text(r[10]));
+    v.sweep = text(r[11]);
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, std::string>> Store::point_ids() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& r : connection_->query("SELECT DISTINCT p.point_id, r.sweep FROM points p JOIN runs r ON r.id = p.run_id "
+                                          "ORDER BY r.sweep, p.point_id"))
+    out.emplace_back(text(r[0]), text(r[1]));
+  return out;
+}
+
+std::string machine_key(const nlohmann::json& context) {
+  auto field = [](const nlohmann::json& obj, const char* key) -> std::string {
+    if (!obj.is_object() || !obj.contains(key)) return "?";
+    return obj[key].is_string() ? obj[key].get<std::string>() : obj[key].dump();
+  };
+  const nlohmann::json device = context.value("device", nlohmann::json());
+  const std::string dev = device.is_object() ? field(device, "name") + " (" + field(device, "driver_info") + ")" : "no device";
+  return fmt::format("{}; {} x{}; LP_NUM_THREADS={}", dev, field(context, "cpu_model"), field(context, "cpu_cores"),
+                     field(context, "lp_num_threads"));
+}
+
+RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::string& source) {
+  const std::string schema = doc.value("schema", "");
+  const bool sweep = schema.rfind("bokehbench.", 0) == 0 && doc.contains("points") && doc["points"].is_array() &&
+                     doc.contains("context") && doc["context"].is_object() &&
+                     std::all_of(doc["points"].begin(), doc["points"].end(),
+                                 [](const nlohmann::json& p) { return p.is_object() && p.contains("id"); });
+  if (!sweep)
+    throw std::runtime_error(fmt::format("not the results of a sweep (schema '{}': a sweep file has context and points with "
+                                         "ids and samples; memory, kernels and stability are not sweeps)",
+                                         schema));
+  const nlohmann::json& context = doc["context"];
+  RunRow run;
+  run.commit = context.value("git_commit", "unknown");
+  run.date_utc = context.value("date_utc", "");
+  run.machine = machine_key(context);
+  run.sweep = schema.substr(std::string("bokehbench.").size());
+  run.status = doc.value("status", "complete");
+  const nlohmann::json config = doc.value("config", nlohmann::json::object());
+  run.shard = config.contains("shard") && config["shard"].is_string() ? config["shard"].get<std::string>() : "";
+  run.command = command;
+  run.source = source;
+  run.context = context.dump();
+  return run;
+}
+
+std::vector<PointRow> points_of(const nlohmann::json& doc) {
+  std::vector<PointRow> out;
+  if (!doc.contains("points") || !doc["points"].is_array()) return out;
+  for (const auto& p : doc["points"]) {
+    if (!p.is_object()) continue;
+    PointRow row;
+    row.point_id = p.value("id", "");
+    row.method = p.value("method", "");
+    row.backend = p.value("backend", "");
+    if (p.contains("frame_ms") && p["frame_ms"].is_object()) {
+      row.median_ms = p["frame_ms"].value("median", 0.0);
+      row.q1_ms = p["frame_ms"].value("q1", 0.0);
+      row.q3_ms = p["frame_ms"].value("q3", 0.0);
+    }
+    row.settled = p.value("settled", false);
+    if (p.contains("samples_ms")) row.samples_ms = p["samples_ms"].get<std::vector<double>>();
+    if (p.contains("samples_cpu_ms")) row.samples_cpu_ms = p["samples_cpu_ms"].get<std::vector<double>>();
+    if (!row.samples_cpu_ms.empty()) {
+      std::vector<double> sorted = row.samples_cpu_ms;
+      std::sort(sorted.begin(), sorted.end());
+      const std::size_t n = sorted.size();
+      row.cpu_median_ms = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+    }
+    if (!row.point_id.empty()) out.push_back(std::move(row));
+  }
+  return out;
+}
+
+std::string default_store_url(const std::string& out_dir) {
+  return (std::filesystem::path(out_dir) / "history.sqlite").string();
+}
+
+}  // namespace bokeh::history

@@ -1,0 +1,276 @@
+// The results store on both back-ends: what is appended reads back exactly; a failed append leaves
+// nothing; concurrent writers lose nothing; a newer store is refused without change; bad URLs name the
+// problem. PostgreSQL runs when BOKEH_TEST_POSTGRES_HOST (a socket folder) and _USER are set, as
+// tests/with_postgres.py sets them around this executable (a throwaway server).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <thread>
+
+#include <fmt/format.h>
+#include <sqlite3.h>
+#ifdef BOKEH_HAVE_PQXX
+#include <pqxx/pqxx>
+#endif
+
+#include "history.hpp"
+#include "html_report.hpp"
+#include "merge.hpp"
+#include "store.hpp"
+
+namespace bokeh::history {
+namespace {
+
+const char* env(const char* name) {
+  const char* v = std::getenv(name);
+  return v && *v ? v : nullptr;
+}
+
+// A fresh, empty store of the back-end under test; `sql` runs raw SQL on it (to tamper with it as a
+// newer bokehbench or another tool would).
+class StoreTest : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    const int n = counter++;
+    if (GetParam() == "sqlite") {
+      dir_ = std::filesystem::temp_directory_path() / fmt::format("bokeh_store_test_{}_{}", ::getpid(), n);
+      std::filesystem::remove_all(dir_);
+      std::filesystem::create_directories(dir_);
+      url_ = (dir_ / "history.sqlite").string();
+      return;
+    }
+#ifdef BOKEH_HAVE_PQXX
+    const char *host = env("BOKEH_TEST_POSTGRES_HOST"), *user = env("BOKEH_TEST_POSTGRES_USER");
+    if (!host || !user) GTEST_SKIP() << "no PostgreSQL server: run through tests/with_postgres.py (ctest does)";
+    const std::string db = fmt::format("store_test_{}_{}", ::getpid(), n);
+    pqxx::connection admin(fmt::format("postgresql://{}@/postgres?host={}", user, host));
+    pqxx::nontransaction(admin).exec("CREATE DATABASE " + db);
+    url_ = fmt::format("postgresql://{}@/{}?host={}", user, db, host);
+#else
+    GTEST_SKIP() << "built without libpqxx";
+#endif
+  }
+  void TearDown() override {
+    if (!dir_.empty()) std::filesystem::remove_all(dir_);
+  }
+  void sql(const std::string& statement) {
+    if (GetParam() == "sqlite") {
+      sqlite3* db = nullptr;
+      ASSERT_EQ(sqlite3_open(url_.c_str(), &db), SQLITE_OK);
+      ASSERT_EQ(sqlite3_exec(db, statement.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+      sqlite3_close(db);
+      return;
+    }
+#ifdef BOKEH_HAVE_PQXX
+    pqxx::connection c(url_);
+    pqxx::nontransaction(c).exec(statement);
+#endif
+  }
+  std::filesystem::path dir_;
+  std::string url_;
+};
+
+RunRow a_run(const std::string& commit, const std::string& date, const std::string& status = "complete") {
+  RunRow r;
+  r.commit = commit, r.date_utc = date, r.machine = "machine A", r.sweep = "figure9", r.status = status;
+  r.command = "bokehbench figure9 --quick", r.source = "run", r.context = R"({"git_commit":")" + commit + "\"}";
+  return r;
+}
+
+std::vector<PointRow> two_points(double scale) {
+  PointRow a{"naive/gpu/x", "naive", "gpu", 10 * scale, 9 * scale, 11 * scale, 8 * scale, true,
+             {10 * scale, 9 * scale, 11 * scale, 0.1 + 0.2}, {8 * scale, 8 * scale, 8 * scale, 1.0 / 3}};
+  PointRow b{"flag/gpu/x", "flag", "gpu", 5, 4, 6, 0, false, {5, 4, 6}, {}};
+  return {a, b};
+}
+
+TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
+  auto store = Store::open(url_, true);
+  const auto id = store->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));
+  const auto runs = store->runs();
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].id, id);
+  EXPECT_EQ(runs[0].commit, "c1");
+  EXPECT_EQ(runs[0].machine, "machine A");
+  EXPECT_EQ(runs[0].context, R"({"git_commit":"c1"})");
+  const auto points = store->points(id);
+  ASSERT_EQ(points.size(), 2u);  // ordered by id: flag before naive
+  EXPECT_EQ(points[1].point_id, "naive/gpu/x");
+  EXPECT_EQ(points[1].samples_ms, two_points(1)[0].samples_ms);  // bit for bit, 0.1 + 0.2 and 1/3 included
+  EXPECT_EQ(points[1].samples_cpu_ms, two_points(1)[0].samples_cpu_ms);
+  EXPECT_TRUE(points[0].samples_cpu_ms.empty());
+  EXPECT_TRUE(points[1].settled);
+  EXPECT_FALSE(points[0].settled);
+}
+
+TEST_P(StoreTest, SeriesOverCommitsFindTheStepAndSkipInterruptedRuns) {
+  auto store = Store::open(url_, true);
+  for (int c = 0; c < 12; ++c)
+    store->append(a_run(fmt::format("c{:02d}", c), fmt::format("2026-01-01T00:{:02d}:00Z", c)), two_points(c < 7 ? 1.0 : 1.2));
+  store->append(a_run("c99", "2026-01-01T01:00:00Z", "interrupted"), two_points(5));  // never in a series
+  const auto all = series(*store, "naive/gpu/x", Metric::wall, {});
+  ASSERT_EQ(all.size(), 1u);
+  ASSERT_EQ(all[0].values.size(), 12u);
+  ASSERT_EQ(all[0].steps.size(), 1u);
+  EXPECT_EQ(all[0].steps[0].commit, "c07");
+  EXPECT_EQ(all[0].steps[0].before_commit, "c06");
+  EXPECT_NEAR(all[0].steps[0].ratio, 1.2, 1e-9);
+  EXPECT_THROW(series(*store, "no/such/point", Metric::wall, {}), std::runtime_error);
+  // The report draws the step.
+  HtmlReportInput in;
+  in.runs = store->runs();
+  in.series = all;
+  const std::string html = html_report(in);
+  EXPECT_NE(html.find("class=\"change-point\""), std::string::npos);
+  EXPECT_NE(html.find("+20.0% at c07"), std::string::npos);
+}
+
+TEST_P(StoreTest, AFailedAppendLeavesNothing) {
+  auto store = Store::open(url_, true);
+  store->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));
+  auto twice = two_points(1);
+  twice.push_back(twice[0]);  // the same point twice: the second insert fails inside the transaction
+  EXPECT_THROW(store->append(a_run("c2", "2026-01-02T00:00:00Z"), twice), std::runtime_error);
+  EXPECT_EQ(store->runs().size(), 1u);
+  store->append(a_run("c3", "2026-01-03T00:00:00Z"), two_points(1));  // and the store still takes runs
+  EXPECT_EQ(store->runs().size(), 2u);
+}
+
+TEST_P(StoreTest, ConcurrentWritersLoseNothing) {
+  Store::open(url_, true);
+  constexpr int kWriters = 4, kRuns = 10;
+  std::vector<std::thread> writers;
+  std::atomic<int> failures{0};
+  for (int w = 0; w < kWriters; ++w)
+    writers.emplace_back([&, w] {
+      try {
+        auto store = Store::open(url_, true);  // a connection of its own, as a second process has
+        for (int r = 0; r < kRuns; ++r) store->append(a_run(fmt::format("w{}r{}", w, r), "2026-01-01T00:00:00Z"), two_points(1));
+      } catch (const std::exception& e) {
+        ++failures;
+        ADD_FAILURE() << e.what();
+      }
+    });
+  for (auto& t : writers) t.join();
+  EXPECT_EQ(failures, 0);
+  auto store = Store::open(url_, false);
+  const auto runs = store->runs();
+  ASSERT_EQ(runs.size(), static_cast<std::size_t>(kWriters * kRuns));
+  for (const auto& r : runs) EXPECT_EQ(store->points(r.id).size(), 2u) << r.commit;
+}
+
+TEST_P(StoreTest, ANewerStoreIsRefusedAndKeptAsItWas) {
+  Store::open(url_, true)->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));
+  sql("UPDATE meta SET value = '99' WHERE key = 'schema_version'");
+  try {
+    Store::open(url_, true);
+    FAIL() << "a store of schema version 99 was opened";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("schema version 99, newer than this bokehbench reads (1)"), std::string::npos) << e.what();
+  }
+  sql("UPDATE meta SET value = '1' WHERE key = 'schema_version'");
+  EXPECT_EQ(Store::open(url_, false)->runs().size(), 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, StoreTest, ::testing::Values("sqlite", "postgresql"),
+                         [](const auto& info) { return info.param; });
+
+TEST(StoreUrl, BadUrlsNameTheProblem) {
+  auto message = [](const std::string& url, bool create) {
+    try {
+      Store::open(url, create);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("opened");
+  };
+  EXPECT_NE(message("mysql://host/db", true).find("unknown URL scheme 'mysql'"), std::string::npos);
+  EXPECT_NE(message("sqlite:", true).find("no file path"), std::string::npos);
+  EXPECT_NE(message("/nonexistent/dir/h.sqlite", false).find("no results store at"), std::string::npos);
+#ifdef BOKEH_HAVE_PQXX
+  // Port 1 on the loopback: nothing listens there.
+  EXPECT_NE(message("postgresql://nobody@127.0.0.1:1/db?connect_timeout=5", true).find("cannot connect to the PostgreSQL"),
+            std::string::npos);
+  EXPECT_NE(message("postgresql://[bad", true).find("PostgreSQL"), std::string::npos);
+  // A password in the URL is not printed.
+  const std::string with_password = message("postgresql://bench:secret@127.0.0.1:1/db?connect_timeout=5", true);
+  EXPECT_EQ(with_password.find("secret"), std::string::npos) << with_password;
+  EXPECT_NE(with_password.find("postgresql://bench:***@127.0.0.1:1/db"), std::string::npos) << with_password;
+#endif
+}
+
+TEST(StoreUrl, AFileThatIsNotAStore) {
+  const auto path = std::filesystem::temp_directory_path() / fmt::format("bokeh_not_a_store_{}.sqlite", ::getpid());
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+    sqlite3_exec(db, "CREATE TABLE other (x)", nullptr, nullptr, nullptr);
+    sqlite3_close(db);
+  }
+  EXPECT_THROW(Store::open(path.string(), false), std::runtime_error);
+  std::filesystem::remove(path);
+}
+
+// Shards: three documents of one sweep join into one with every point once.
+nlohmann::json shard_doc(int index, int count, const std::vector<std::string>& ids, const std::string& cpu = "EPYC") {
+  nlohmann::json points = nlohmann::json::array();
+  for (const auto& id : ids) points.push_back({{"id", id}, {"samples_ms", {1.0, 2.0, 3.0}}});
+  return {{"schema", "bokehbench.figure9"},
+          {"schema_version", 2},
+          {"status", "complete"},
+          {"context", {{"cpu_model", cpu}, {"cpu_cores", 2}, {"git_commit", "abc"}}},
+          {"config", {{"sizes", {5, 9}}, {"shard", fmt::format("{}/{}", index, count)}}},
+          {"methods", nlohmann::json::array()},
+          {"measurement", {{"rounds", index}}},
+          {"points", points},
+          {"skipped", nlohmann::json::array()},
+          {"elapsed_s", 10.0 * index},
+          {"series", "derived from this shard's points only"}};
+}
+
+TEST(MergeShards, EveryPointOnceAndTheDerivedFiguresDropped) {
+  const auto merged = merge_shards({shard_doc(2, 3, {"b"}), shard_doc(1, 3, {"a", "d"}), shard_doc(3, 3, {"c"})},
+                                   {"s2.json", "s1.json", "s3.json"});
+  std::set<std::string> ids;
+  for (const auto& p : merged["points"]) ids.insert(p["id"].get<std::string>());
+  EXPECT_EQ(ids, (std::set<std::string>{"a", "b", "c", "d"}));
+  EXPECT_EQ(merged["points"].size(), 4u);
+  EXPECT_EQ(merged["status"], "complete");
+  EXPECT_FALSE(merged["config"].contains("shard"));
+  EXPECT_FALSE(merged.contains("series"));
+  EXPECT_EQ(merged["shards"].size(), 3u);
+  EXPECT_EQ(merged["elapsed_s"], 30.0);
+  EXPECT_FALSE(merged["context"].contains("shard_machines"));  // one machine
+}
+
+TEST(MergeShards, RefusesWhatIsNotOneWholeSweep) {
+  auto message = [](const std::vector<nlohmann::json>& docs) {
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < docs.size(); ++i) names.push_back(fmt::format("f{}.json", i));
+    try {
+      merge_shards(docs, names);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("merged");
+  };
+  EXPECT_NE(message({shard_doc(1, 3, {"a"}), shard_doc(2, 3, {"b"})}).find("shard 3/3 is missing"), std::string::npos);
+  EXPECT_NE(message({shard_doc(1, 2, {"a"}), shard_doc(1, 2, {"b"})}).find("given twice"), std::string::npos);
+  EXPECT_NE(message({shard_doc(1, 2, {"a"}), shard_doc(2, 2, {"a"})}).find("point a is in more than one file"), std::string::npos);
+  auto other = shard_doc(2, 2, {"b"});
+  other["config"]["sizes"] = {5};
+  EXPECT_NE(message({shard_doc(1, 2, {"a"}), other}).find("config.sizes"), std::string::npos);
+  EXPECT_NE(message({shard_doc(1, 2, {"a"}), shard_doc(2, 3, {"b"})}).find("one of 2"), std::string::npos);
+}
+
+TEST(MergeShards, MachinesAreNamedWhenTheyDiffer) {
+  const auto merged = merge_shards({shard_doc(1, 2, {"a"}, "EPYC"), shard_doc(2, 2, {"b"}, "Xeon")}, {"x", "y"});
+  ASSERT_TRUE(merged["context"].contains("shard_machines"));
+  EXPECT_EQ(merged["context"]["shard_machines"].size(), 2u);
+}
+
+}  // namespace
+}  // namespace bokeh::history

@@ -1,0 +1,98 @@
+#!/usr/bin/python3
+"""The history end to end: a real run imported as 12 commits with a known step (every sample x1.25 from
+commit c07 on), its change points, and the HTML report opened in a real headless browser (Debian's
+chromium): no console messages, every trend drawn, every plot decoded; a screenshot is kept.
+
+usage: report_browser_test.py BOKEHBENCH WORKDIR REAL_RUN_JSON PLOTS_DIR
+"""
+import json
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+
+STEP_AT, FACTOR = 7, 1.25
+
+
+def run(cmd, ok=(0,)):
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert done.returncode in ok, f"{' '.join(map(str, cmd))}: exit {done.returncode}\n{done.stdout}\n{done.stderr}"
+    return done
+
+
+def chromium(args, page):
+    """Runs headless chromium on a page; returns (stdout, console lines)."""
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        sys.exit("FAIL: chromium is not installed (apt-get install chromium; .ci/setup installs it)")
+    done = subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--enable-logging=stderr", "--v=0",
+                           *args, page.as_uri()], capture_output=True, text=True, timeout=120)
+    console = [l for l in done.stderr.splitlines() if ":CONSOLE" in l]
+    return done, console
+
+
+def main(bokehbench, workdir, real_run, plots_dir):
+    work = pathlib.Path(workdir)
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    base = json.loads(pathlib.Path(real_run).read_text())
+    files = []
+    for c in range(12):
+        doc = json.loads(json.dumps(base))
+        doc["context"]["git_commit"] = f"c{c:02d}"
+        doc["context"]["date_utc"] = f"2026-01-01T00:{c:02d}:00Z"
+        factor = FACTOR if c >= STEP_AT else 1.0
+        for p in doc["points"]:
+            p["samples_ms"] = [v * factor for v in p["samples_ms"]]
+            p["samples_cpu_ms"] = [v * factor for v in p["samples_cpu_ms"]]
+        path = work / f"run{c:02d}.json"
+        path.write_text(json.dumps(doc))
+        files.append(str(path))
+    store = work / "history.sqlite"
+    run([bokehbench, "history", "import", "--store", str(store), *files])
+    again = run([bokehbench, "history", "import", "--store", str(store), files[0]])
+    assert "already in the store" in again.stdout, again.stdout
+
+    # Every series steps at c07 by exactly the factor (the same samples, scaled).
+    changes = work / "changes.json"
+    run([bokehbench, "history", "changes", "--store", str(store), "--json", str(changes)])
+    series = json.loads(changes.read_text())["series"]
+    assert len(series) == len(base["points"]), (len(series), len(base["points"]))
+    for s in series:
+        assert len(s["steps"]) == 1, s
+        step = s["steps"][0]
+        assert step["commit"] == f"c{STEP_AT:02d}" and step["before_commit"] == f"c{STEP_AT - 1:02d}", step
+        assert abs(step["ratio"] - FACTOR) < 1e-9, step
+    print(f"{len(series)} series, each with its one step at c{STEP_AT:02d} (x{FACTOR})")
+
+    page = work / "report.html"
+    run([bokehbench, "report", "--store", str(store), "--out", str(page), "--plots-dir", plots_dir])
+    html = page.read_text()
+    assert "http://" not in html.replace('xmlns="http://www.w3.org/2000/svg"', "") and "https://" not in html, \
+        "the page must be self-contained"
+    done, console = chromium(["--dump-dom"], page)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert not console, "console messages:\n" + "\n".join(console)
+    rendered = re.search(r'data-rendered="trends:(\d+) images:(\d+)/(\d+)"', done.stdout)
+    assert rendered, "the page's load check did not run"
+    trends, loaded, images = map(int, rendered.groups())
+    assert trends == len(series), (trends, len(series))
+    assert images >= 1 and loaded == images, f"{loaded} of {images} plots decoded"
+    print(f"chromium: {trends} trends drawn, {loaded}/{images} plots decoded, no console messages")
+    shot = work / "report.png"
+    done, console = chromium([f"--screenshot={shot}", "--window-size=1200,2400", "--hide-scrollbars"], page)
+    assert shot.exists() and shot.stat().st_size > 10000, "no screenshot"
+    print(f"screenshot: {shot} (CI keeps it as an artifact)")
+
+    # The console check is not vacuous: a page with an error is caught.
+    bad = work / "bad.html"
+    bad.write_text("<html><body><script>console.error('plot did not load: x');</script></body></html>")
+    _, console = chromium(["--dump-dom"], bad)
+    assert console, "a console error went unseen"
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 5:
+        sys.exit(__doc__)
+    main(*sys.argv[1:])
