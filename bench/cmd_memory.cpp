@@ -43,6 +43,19 @@ void memory(MemoryOptions& o) {
              "paper conv MiB", "allocated MiB", "allocated B", "paper prints");
   for (const auto& name : o.axes.precisions) {
     const LayerPrecision precision = layer_precision_from_string(name);
+    // What every row of this precision states: frame, gather, texel, scale, extent, allocation.
+    auto base_row = [&](int scale, const FlagBufferExtent& extent, std::uint64_t allocated) {
+      return nlohmann::json{{"width_px", o.width_px},
+                            {"height_px", o.height_px},
+                            {"gather_n", o.size_n},
+                            {"layers_full", pattern.layers()},
+                            {"precision", name},
+                            {"bytes_per_texel", bytes_per_texel(precision)},
+                            {"scale", scale},
+                            {"extent", {{"width", extent.width}, {"height", extent.height}, {"layers", extent.layers}}},
+                            {"allocated_bytes", allocated},
+                            {"allocated_mib", allocated / kMiB}};
+    };
     for (int scale : o.axes.scales.empty() ? find_method("flag").buffer_scales : o.axes.scales) {
       const FlagBufferExtent extent = flag_buffer_extent(o.width_px, o.height_px, pattern, scale);
       const double paper_bytes = flag_paper_bytes(o.width_px, o.height_px, pattern, precision, scale);
@@ -52,20 +65,11 @@ void memory(MemoryOptions& o) {
       fmt::print("{:<17} 1/{:<5} {:>14} {:>14.2f} {:>16.2f} {:>12} {:>12}\n", name, scale,
                  fmt::format("{}x{}x{}", extent.width, extent.height, extent.layers), paper_bytes / kMiB,
                  allocated / kMiB, allocated, printed > 0 ? fmt::format("{} MB", printed) : "-");
-      nlohmann::json row = {{"layer_buffer", "full"},
-                            {"width_px", o.width_px},
-                            {"height_px", o.height_px},
-                            {"gather_n", o.size_n},
-                            {"layers_full", pattern.layers()},
-                            {"precision", name},
-                            {"bytes_per_texel", bytes_per_texel(precision)},
-                            {"scale", scale},
-                            {"extent", {{"width", extent.width}, {"height", extent.height}, {"layers", extent.layers}}},
-                            {"paper_convention_bytes", paper_bytes},
-                            {"paper_convention_mib", paper_bytes / kMiB},
-                            {"texel_bytes", flag_texel_bytes(o.width_px, o.height_px, pattern, precision, scale)},
-                            {"allocated_bytes", allocated},
-                            {"allocated_mib", allocated / kMiB}};
+      nlohmann::json row = base_row(scale, extent, allocated);
+      row.update({{"layer_buffer", "full"},
+                  {"paper_convention_bytes", paper_bytes},
+                  {"paper_convention_mib", paper_bytes / kMiB},
+                  {"texel_bytes", flag_texel_bytes(o.width_px, o.height_px, pattern, precision, scale)}});
       if (printed > 0) row["paper_printed_mb"] = printed;
       rows.push_back(row);
     }
@@ -73,35 +77,25 @@ void memory(MemoryOptions& o) {
     // The full buffer does not depend on k; the ring's rows do (n k): the pattern's own k.
     const GatherPattern grid = o.axes.patterns().front();
     for (int requested : o.band_rows) {
-      const FlagBufferExtent full = flag_buffer_extent(o.width_px, o.height_px, grid, 1);
-      const int reach_rows = grid.half() * grid.spacing_px;
-      const std::uint64_t row_bytes =
-          static_cast<std::uint64_t>(full.width) * full.layers * static_cast<std::uint64_t>(bytes_per_texel(precision));
-      const int band = flag_stream_band_rows(requested, ctx.info().is_software(), reach_rows, row_bytes);
-      const int ring = flag_stream_ring_rows(band, reach_rows, full.height);
-      const auto allocated = vk::image_3d_requirement_bytes(ctx, layer_format(precision), full.width, ring, full.layers);
-      const std::uint64_t texels = static_cast<std::uint64_t>(full.width) * ring * full.layers * bytes_per_texel(precision);
+      const FlagStreamRing ring = flag_stream_ring(flag_buffer_extent(o.width_px, o.height_px, grid, 1),
+                                                   grid.spacing_px, precision, requested, ctx.info().is_software());
+      const FlagBufferExtent& e = ring.extent;
+      const int band = ring.band_rows;
+      const auto allocated = vk::image_3d_requirement_bytes(ctx, layer_format(precision), e.width, e.height, e.layers);
+      const std::uint64_t texels = e.texels() * bytes_per_texel(precision);
       fmt::print("{:<17} {:<7} {:>14} {:>14} {:>16.2f} {:>12} {:>12}   band {} rows, k = {}, {} bands\n", name,
-                 "stream", fmt::format("{}x{}x{}", full.width, ring, full.layers), "-", allocated / kMiB, allocated,
+                 "stream", fmt::format("{}x{}x{}", e.width, e.height, e.layers), "-", allocated / kMiB, allocated,
                  "-", band, grid.spacing_px, (o.height_px + band - 1) / band);
-      rows.push_back({{"width_px", o.width_px},
-                      {"height_px", o.height_px},
-                      {"gather_n", o.size_n},
-                      {"spacing_px", grid.spacing_px},
-                      {"layers_full", pattern.layers()},
-                      {"precision", name},
-                      {"bytes_per_texel", bytes_per_texel(precision)},
-                      {"scale", 1},
-                      {"layer_buffer", "streamed"},
-                      {"band_rows", band},
-                      {"band_rows_requested", requested},
-                      {"extent", {{"width", full.width}, {"height", ring}, {"layers", full.layers}}},
-                      {"texel_bytes", texels},
-                      // The paper's convention has no fractional layers to drop here: the ring's texels.
-                      {"paper_convention_bytes", texels},
-                      {"paper_convention_mib", texels / kMiB},
-                      {"allocated_bytes", allocated},
-                      {"allocated_mib", allocated / kMiB}});
+      nlohmann::json row = base_row(1, e, allocated);
+      row.update({{"spacing_px", grid.spacing_px},
+                  {"layer_buffer", "streamed"},
+                  {"band_rows", band},
+                  {"band_rows_requested", requested},
+                  {"texel_bytes", texels},
+                  // The paper's convention has no fractional layers to drop here: the ring's texels.
+                  {"paper_convention_bytes", texels},
+                  {"paper_convention_mib", texels / kMiB}});
+      rows.push_back(row);
     }
   }
   write_results(o.out_path, "bokehbench.memory", run_context(&ctx.info()),

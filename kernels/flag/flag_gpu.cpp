@@ -136,6 +136,16 @@ int flag_stream_ring_rows(int band_rows, int reach_rows, int height) {
   return static_cast<int>(std::min<std::int64_t>(height, static_cast<std::int64_t>(band_rows) + 2 * reach_rows));
 }
 
+FlagStreamRing flag_stream_ring(const FlagBufferExtent& full, int spacing_px, LayerPrecision precision,
+                                int requested_band_rows, bool software_device) {
+  const int reach_rows = (full.layers - 1) * spacing_px;  // the rows a vertical pass reads away
+  const std::uint64_t row_bytes =
+      static_cast<std::uint64_t>(full.width) * full.layers * static_cast<std::uint64_t>(bytes_per_texel(precision));
+  FlagStreamRing ring{flag_stream_band_rows(requested_band_rows, software_device, reach_rows, row_bytes), full};
+  ring.extent.height = flag_stream_ring_rows(ring.band_rows, reach_rows, full.height);
+  return ring;
+}
+
 namespace {
 
 void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, bool bracketed) {
@@ -241,10 +251,11 @@ class Flag final : public gpu::GpuFilter {
     std::vector<std::int32_t> vertical_constants = {layer_count_, tile_px_};
     // Streamed: the ring's rows (constant_id 7, LAYER_ROWS in shaders/flag/layer_rows.glsl; 0: full).
     if (config.streamed && extent_y > 1) {
-      const int reach_rows = (layer_count_ - 1) * pattern_.spacing_px;  // the rows a vertical pass reads away
-      const std::uint64_t row_bytes = static_cast<std::uint64_t>(extent_x) * layer_count_ * bytes_per_texel(config.precision);
-      band_rows_ = flag_stream_band_rows(config.band_rows, frame.ctx.info().is_software(), reach_rows, row_bytes);
-      extent_y = static_cast<std::uint32_t>(flag_stream_ring_rows(band_rows_, reach_rows, static_cast<int>(extent_y)));
+      const FlagStreamRing ring = flag_stream_ring(
+          {static_cast<int>(extent_x), static_cast<int>(extent_y), layer_count_}, pattern_.spacing_px,
+          config.precision, config.band_rows, frame.ctx.info().is_software());
+      band_rows_ = ring.band_rows;
+      extent_y = static_cast<std::uint32_t>(ring.extent.height);
       horizontal_constants.push_back(static_cast<std::int32_t>(extent_y));
       vertical_constants.resize(7, 0);
       vertical_constants.push_back(static_cast<std::int32_t>(extent_y));

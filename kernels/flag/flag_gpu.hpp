@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "flag.hpp"
+#include "flag_memory.hpp"
 #include "method.hpp"
 
 namespace bokeh {
@@ -57,6 +58,14 @@ enum class FlagLayerBuffer { full, streamed };
 int flag_stream_band_rows(int requested, bool software_device, int reach_rows, std::uint64_t row_bytes);
 // Rows of the ring: B + 2 n k, at most the grid's height (then it is the full buffer's extent).
 int flag_stream_ring_rows(int band_rows, int reach_rows, int height);
+// The streamed ring of a layer buffer whose whole extent is `full`, on a grid of `spacing_px`: its band
+// and its extent (the full width and layers, the ring's rows), as the GPU driver allocates it.
+struct FlagStreamRing {
+  int band_rows = 0;
+  FlagBufferExtent extent;
+};
+FlagStreamRing flag_stream_ring(const FlagBufferExtent& full, int spacing_px, LayerPrecision precision,
+                                int requested_band_rows, bool software_device);
 
 // Parses `options` once (flag_config) and makes the filter.
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);

@@ -60,10 +60,10 @@ MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
   if (c.streamed) {
     // The ring as the GPU driver sizes it (flag_gpu.cpp), for the worst case's layers; no device:
     // lavapipe's choice.
-    const int reach_rows = (e.layers - 1) * reduced_pattern(c.pattern, c.buffer_scale).spacing_px;
-    const std::uint64_t row_bytes = static_cast<std::uint64_t>(e.width) * e.layers * bytes_per_texel(c.precision);
-    band_rows = flag_stream_band_rows(c.band_rows, ctx ? ctx->info().is_software() : true, reach_rows, row_bytes);
-    e.height = flag_stream_ring_rows(band_rows, reach_rows, e.height);
+    const FlagStreamRing ring = flag_stream_ring(e, reduced_pattern(c.pattern, c.buffer_scale).spacing_px,
+                                                 c.precision, c.band_rows, ctx ? ctx->info().is_software() : true);
+    band_rows = ring.band_rows;
+    e = ring.extent;
   }
   const std::uint64_t texels = e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
   std::uint64_t layers = texels;
