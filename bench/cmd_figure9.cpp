@@ -308,6 +308,9 @@ void figure9(Figure9Options& o) {
   s.visit_together = [](const SweepPoint& p) {
     return fmt::format("{}/{}/{}/{}/{}", p.backend, p.scene, p.resolution.text(), p.options.pattern.size_n, p.max_coc_px);
   };
+  // Every N of one backend one after another: a round's curve, to which its exponent is fitted, is then
+  // measured within seconds rather than across the whole round, which on a drifting VM spans phases.
+  s.visit_block = [](const SweepPoint& p) { return fmt::format("{}/{}/{}", p.backend, p.scene, p.resolution.text()); };
   s.headlines_settled = [&points, target_ratio, target_exponent](const runner::RunRecord& record) {
     return figures(round_points(points, record), Metric::wall, target_ratio, target_exponent, true).unsettled.empty();
   };

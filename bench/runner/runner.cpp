@@ -167,24 +167,33 @@ bool settled(const PointRecord& r, const Policy& p, bool by_headlines) {
   return distribution(r.frame_ms()).relative_iqr() <= p.settled_relative_iqr;
 }
 
-// This round's visiting order of the active points (Hooks::visit_group).
+// This round's visiting order of the active points (Hooks::visit_block and visit_group).
 std::vector<std::size_t> round_order(const std::vector<std::size_t>& active, const std::vector<std::size_t>& group,
-                                     int round, std::mt19937_64& rng) {
+                                     const std::vector<std::size_t>& block, int round, std::mt19937_64& rng) {
   std::vector<std::size_t> order = active;
-  if (group.empty()) {
+  if (group.empty() && block.empty()) {
     std::shuffle(order.begin(), order.end(), rng);
     return order;
   }
-  std::map<std::size_t, std::vector<std::size_t>> members;  // active points by group, in index order
-  for (std::size_t i : active) members[group.at(i)].push_back(i);
-  std::vector<std::size_t> groups;
-  for (const auto& [g, m] : members) groups.push_back(g);
-  std::shuffle(groups.begin(), groups.end(), rng);
+  // Active points by block, then group (a point's own index when it has none), in index order.
+  std::map<std::size_t, std::map<std::size_t, std::vector<std::size_t>>> members;
+  for (std::size_t i : active) {
+    const std::size_t g = group.empty() ? i : group.at(i);
+    members[block.empty() ? g : block.at(i)][g].push_back(i);
+  }
+  std::vector<std::size_t> blocks;
+  for (const auto& [b, groups] : members) blocks.push_back(b);
+  std::shuffle(blocks.begin(), blocks.end(), rng);
   order.clear();
-  for (std::size_t g : groups) {
-    std::vector<std::size_t>& m = members[g];
-    std::rotate(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(round % m.size()), m.end());
-    order.insert(order.end(), m.begin(), m.end());
+  for (std::size_t b : blocks) {
+    std::vector<std::size_t> groups;
+    for (const auto& [g, m] : members[b]) groups.push_back(g);
+    std::shuffle(groups.begin(), groups.end(), rng);
+    for (std::size_t g : groups) {
+      std::vector<std::size_t>& m = members[b][g];
+      std::rotate(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(round % m.size()), m.end());
+      order.insert(order.end(), m.begin(), m.end());
+    }
   }
   return order;
 }
@@ -236,7 +245,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
 
   const bool by_headlines = static_cast<bool>(hooks.headlines_settled);
   for (int round = 0; !active.empty() && !interrupted(); ++round) {
-    const std::vector<std::size_t> order = round_order(active, hooks.visit_group, round, rng);
+    const std::vector<std::size_t> order = round_order(active, hooks.visit_group, hooks.visit_block, round, rng);
     record.round_order.push_back(order);
     for (auto& [name, probe] : hooks.probes) {
       if (round == 0) {

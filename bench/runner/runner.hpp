@@ -110,6 +110,11 @@ struct Hooks {
   // order is shuffled and the order inside a group turns by one each round, so two points take
   // turns going first. Empty: every point is a group of its own.
   std::vector<std::size_t> visit_group;
+  // visit_block[i]: groups whose points share a block are visited one after another, as one run of
+  // visits in every round (e.g. every size of one backend, so a growth exponent fitted to one round's
+  // curve comes from measurements seconds apart, not spread over the whole round); the blocks' order
+  // and the groups' order inside a block are shuffled. Empty: every group is a block of its own.
+  std::vector<std::size_t> visit_block;
   // After every round from min_samples on: true ends the run (the command's headline figures are
   // as tight as it asked). When set, no point leaves the rounds by its own IQR, since a figure
   // drawn from several points needs them all in the same rounds; max_samples and the budget still

@@ -459,7 +459,8 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
   }
   nlohmann::json measurement = {
       {"interleaved", "every round visits every unfinished point once, in a shuffled order (seeded; points the "
-                      "command compares with each other back to back, taking turns going first); each visit takes "
+                      "command compares with each other back to back, taking turns going first, and the points of a curve "
+                      "it fits one after another in a shuffled order); each visit takes "
                       "one sample of frames_per_sample frames"},
       {"seed", s.policy.seed},
       {"budget_s", s.policy.budget_s},
@@ -601,6 +602,10 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   if (s.visit_together) {
     std::map<std::string, std::size_t> groups;
     for (const auto& p : points) hooks.visit_group.push_back(groups.emplace(s.visit_together(p), groups.size()).first->second);
+  }
+  if (s.visit_block) {
+    std::map<std::string, std::size_t> blocks;
+    for (const auto& p : points) hooks.visit_block.push_back(blocks.emplace(s.visit_block(p), blocks.size()).first->second);
   }
   hooks.headlines_settled = s.headlines_settled;
 

@@ -108,6 +108,9 @@ struct SweepSettings {
   // Points visited back to back in every round (runner::Hooks::visit_group): those whose keys are
   // equal. Empty: every point on its own.
   std::function<std::string(const SweepPoint&)> visit_together;
+  // Groups visited one after another in every round (runner::Hooks::visit_block): those whose points'
+  // keys are equal. Empty: every group on its own.
+  std::function<std::string(const SweepPoint&)> visit_block;
   // Ends the rounds once the command's headline figures are as tight as it asked
   // (runner::Hooks::headlines_settled).
   std::function<bool(const runner::RunRecord&)> headlines_settled;

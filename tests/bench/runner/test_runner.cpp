@@ -56,6 +56,7 @@ struct Harness {
   std::uint64_t bytes = 0;
   std::vector<std::string> fail_on_prepare;  // per point: throw this text from prepare
   std::vector<std::size_t> visit_group;                      // runner::Hooks::visit_group
+  std::vector<std::size_t> visit_block;                      // runner::Hooks::visit_block
   std::function<bool(const RunRecord&)> headlines_settled;   // runner::Hooks::headlines_settled
 
   RunRecord run(const std::vector<double>& times, const Policy& policy, const std::vector<std::string>& skip = {},
@@ -74,6 +75,7 @@ struct Harness {
     };
     hooks.checkpoint = std::move(checkpoint);
     hooks.visit_group = visit_group;
+    hooks.visit_block = visit_block;
     hooks.headlines_settled = headlines_settled;
     return runner::run(names, skip, policy, hooks);
   }
@@ -232,6 +234,38 @@ TEST(Runner, PointsOfAGroupAreVisitedBackToBackTakingTurnsFirst) {
     group_orders.insert(groups);
   }
   EXPECT_GT(group_orders.size(), 1u) << "the groups' order is shuffled anew each round";
+}
+
+// The groups of a block (a curve's sizes) are visited one after another, each group still back to back
+// and taking turns going first; the blocks' order and the groups' order inside a block are shuffled.
+TEST(Runner, GroupsOfABlockAreVisitedOneAfterAnother) {
+  Harness h;
+  h.jitter.assign(8, {0.0, 0.3});
+  h.visit_group = {0, 1, 2, 3, 0, 1, 2, 3};  // pairs (0, 4), (1, 5), (2, 6), (3, 7)
+  h.visit_block = {0, 0, 1, 1, 0, 0, 1, 1};  // blocks {pairs 0, 1} and {pairs 2, 3}
+  const RunRecord r = h.run({1, 2, 3, 4, 5, 6, 7, 8}, fast_policy());
+  ASSERT_EQ(r.round_order.size(), 6u);
+  std::set<std::vector<std::size_t>> block_orders, group_orders;
+  for (std::size_t round = 0; round < r.round_order.size(); ++round) {
+    const auto& order = r.round_order[round];
+    ASSERT_EQ(order.size(), 8u);
+    std::vector<std::size_t> blocks, groups;
+    for (std::size_t at = 0; at < 8; at += 2) {
+      EXPECT_EQ(h.visit_group[order[at]], h.visit_group[order[at + 1]]) << "round " << round;
+      const std::size_t first = std::min(order[at], order[at + 1]) == order[at] ? 0 : 1;
+      EXPECT_EQ(first, round % 2) << "round " << round << ": the lower index goes first in even rounds";
+      groups.push_back(h.visit_group[order[at]]);
+    }
+    for (std::size_t at = 0; at < 8; at += 4) {
+      for (std::size_t k = 1; k < 4; ++k)
+        EXPECT_EQ(h.visit_block[order[at]], h.visit_block[order[at + k]]) << "round " << round << ": a block split";
+      blocks.push_back(h.visit_block[order[at]]);
+    }
+    block_orders.insert(blocks);
+    group_orders.insert(groups);
+  }
+  EXPECT_GT(block_orders.size(), 1u) << "the blocks' order is shuffled anew each round";
+  EXPECT_GT(group_orders.size(), 2u) << "the groups' order inside a block is shuffled too";
 }
 
 // A command whose claims are drawn from several points ends the rounds when they are tight: no point
