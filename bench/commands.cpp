@@ -260,6 +260,16 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
       ->capture_default_str();
   cmd->add_option("--cpu-threads", cpu_threads, "Threads for the CPU references (default: every core)")
       ->check(CLI::Range(1, 1024));
+  cmd->add_option("--sample-ms", sample_ms,
+                  "Each visit takes one sample of frames enough to last this long (a frame longer than it: one frame)")
+      ->check(finite_number())
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--lead-in-ms", lead_in_ms,
+                  "Untimed frames worth this long before each sample, to warm the device's state (default: a quarter "
+                  "sample on GPUs, whose clocks fall while other points run; none on CPU devices such as lavapipe)")
+      ->check(finite_number())
+      ->check(CLI::Range(0.0, 10000.0));
   cmd->add_flag("--run-over-budget", run_over_budget,
                 "Run points whose single frame is estimated to take longer than --budget-s (by default they are "
                 "skipped before anything runs, with the estimate: their taps at a ceiling rate)");
@@ -299,6 +309,8 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.frame_budget_s = run_over_budget ? 0.0 : budget_s;
   s.plot = plot;
   s.policy.budget_s = budget_s;
+  s.policy.sample_min_ms = sample_ms;
+  s.policy.lead_in_ms = lead_in_ms;
   s.policy.seed = seed;
   s.policy.extra_work_fraction = inject_slowdown_pct / 100.0;
   s.serve = serve;

@@ -82,6 +82,8 @@ struct SweepFlags {
   std::string device, out_dir = "results", plots_dir = "plots", reference_cache = "build/reference-cache";
   int cpu_threads = 0;
   double max_buffer_mb = 0;
+  double sample_ms = 60;     // --sample-ms: runner::Policy::sample_min_ms
+  double lead_in_ms = -1;    // --lead-in-ms: runner::Policy::lead_in_ms; < 0: auto (run_sweep)
   unsigned seed = 1;
   int inject_slowdown_pct = 0;  // a test of `compare` only (selftest-compare); 0: off
   bool plot = true;

@@ -50,8 +50,9 @@ struct Policy {
   // ramping from idle), for at most this long; frames longer than sample_min_ms warm up with one frame.
   double warm_up_max_s = 3;
   // Before every sample (and probe), frames worth this long run untimed: a discrete GPU left idle
-  // while other points (or the CPU references) ran has lowered its clocks by then. 0: none.
-  double lead_in_ms = 0;
+  // while other points (or the CPU references) ran has lowered its clocks by then. <= 0: none
+  // (run_sweep turns < 0 into its device's default).
+  double lead_in_ms = -1;
   // A test of `compare` (--inject-slowdown-pct), 0 in real runs: every sample runs this fraction
   // more frames than it reports, so each point's frame time grows by exactly that fraction of its
   // own work. It must be p/100 with a whole p; frames per sample become multiples of 100/gcd(p, 100).

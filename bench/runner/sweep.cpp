@@ -552,9 +552,9 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
   nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
   runner::Policy policy = s.policy;
-  // A GPU (not lavapipe) drops its clocks while the CPU references and other points run: each
-  // sample gets an untimed lead-in of a quarter sample first.
-  if (ctx && !ctx->info().is_software() && policy.lead_in_ms == 0) policy.lead_in_ms = policy.sample_min_ms / 4;
+  // Unless given: a GPU (not lavapipe) drops its clocks while the CPU references and other points run,
+  // so each sample gets an untimed lead-in of a quarter sample first; lavapipe none.
+  if (policy.lead_in_ms < 0) policy.lead_in_ms = ctx && !ctx->info().is_software() ? policy.sample_min_ms / 4 : 0;
 
   // Plan: what cannot run is known before anything is allocated.
   std::vector<std::string> names, skip;
