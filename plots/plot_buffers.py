@@ -49,6 +49,18 @@ def rmse_floor(points):
     return min(positive) / 10 if positive else 1e-8
 
 
+def spacing_text(points, cfg):
+    """The spacing k of the points measured (sizes given as NxK carry their own), e.g. "k = 1"."""
+    ks = sorted({p["k"] for p in points}) or [cfg["spacing_px"]]
+    return "k = " + ", ".join(str(k) for k in ks)
+
+
+def legend_if_labelled(ax, **kwargs):
+    """A legend only where something carries a label (a run without f32 or reduced scales has none)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(**kwargs)
+
+
 def res_key(p):
     return (p["width_px"], p["height_px"])
 
@@ -126,11 +138,11 @@ def main(doc, prefix):
             ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="--", marker=".",
                     color=grey, label=f"f32 1/{scale} (resolution alone)")
     ax.set_yscale("log")
-    ax.set_xlabel(f"gather size N (k = {cfg['spacing_px']} px; max CoC radius k(N-1)/2)")
+    ax.set_xlabel(f"gather size N ({spacing_text(points, cfg)} px; max CoC radius k(N-1)/2)")
     ax.set_ylabel("RMSE vs full-res f32 FLAG")
     ax.set_title(f"{big[0]}x{big[1]}: error vs gather size (which precision fails first as radii grow)", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    ax.legend(fontsize=7, ncol=2)
+    legend_if_labelled(ax, fontsize=7, ncol=2)
 
     # Against the exact scatter, for context: full-res FLAG's own error (its k-px sample grid) as a line.
     ax = fig.add_subplot(bottom[0, 1])
@@ -152,7 +164,7 @@ def main(doc, prefix):
     ax.set_ylabel("RMSE vs exact scatter (energy sum)")
     ax.set_title(f"{big[0]}x{big[1]}: error vs the exact scatter, for context", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    ax.legend(fontsize=7)
+    legend_if_labelled(ax, fontsize=7)
 
     ax = fig.add_subplot(bottom[0, 2])
     for p in (p for p in points if res_key(p) == big):
@@ -170,7 +182,7 @@ def main(doc, prefix):
     ax.set_title(f"{big[0]}x{big[1]}: time vs buffer size (markers as above)", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
 
-    fig.suptitle(f"FLAG 3D buffer precision x scale, {cfg['scene']}, N {cfg['sizes']}, k = {cfg['spacing_px']}\n"
+    fig.suptitle(f"FLAG 3D buffer precision x scale, {cfg['scene']}, N {cfg['sizes']}, {spacing_text(points, cfg)}\n"
                  f"{bokehplot.context_line(doc)}", fontsize=9)
     bokehplot.save(fig, prefix)
 
