@@ -10,7 +10,8 @@
 //   on every output value.
 // Apertures (issue 23): each method that declares it can draw a non-disc aperture runs every check
 // above at its defaults with each of a pentagon pointing up (not vertically symmetric), a hexagon,
-// and rotated curved blades, the lens carrying the same aperture.
+// and rotated curved blades, the lens carrying the same aperture (and with adaptive = on, where a method
+// has that option and draws the shape with it).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -72,6 +73,11 @@ std::vector<Config> all_configs() {
       FilterOptions o = m.defaults({9, 2});
       o.aperture = parse_aperture(shape);
       if (aperture_unsupported(m, o).empty()) configs.push_back({&m, o});
+      // adaptive = on too, where the method draws the shape with it (its tile map's bound must hold).
+      if (const OptionSpec* adaptive = m.option("adaptive"); adaptive && adaptive->choices.size() == 2) {
+        o.values["adaptive"] = 1;
+        if (aperture_unsupported(m, o).empty()) configs.push_back({&m, o});
+      }
     }
   return configs;
 }
