@@ -9,9 +9,9 @@
 //   the input's (methods that declare they conserve it), up to storage_tolerance x the largest value
 //   on every output value.
 // Apertures (issue 23): each method that declares it can draw a non-disc aperture runs every check
-// above at its defaults with each of a pentagon pointing up (not vertically symmetric), a hexagon,
-// and rotated curved blades, the lens carrying the same aperture (and with adaptive = on, where a method
-// has that option and draws the shape with it).
+// above at its defaults with each of a pentagon pointing up (not vertically symmetric), a hexagon at
+// rotation 0 and at 15 degrees (off its 60-degree grid), and rotated curved blades, the lens carrying
+// the same aperture (and with adaptive = on, where a method has that option and draws the shape).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -69,7 +69,7 @@ std::vector<Config> all_configs() {
           }
       }
   for (const Method& m : registered_methods())
-    for (const char* shape : {"blades5", "blades6", "blades7-rot20-curv0.5"}) {
+    for (const char* shape : {"blades5", "blades6", "blades6-rot15", "blades7-rot20-curv0.5"}) {
       FilterOptions o = m.defaults({9, 2});
       o.aperture = parse_aperture(shape);
       if (aperture_unsupported(m, o).empty()) configs.push_back({&m, o});
