@@ -10,8 +10,6 @@ namespace bokeh {
 
 namespace {
 
-enum class Direction { up, downleft, downright };
-
 // The float operations of hexagon.glsl, in its order.
 float clamp01(float v) { return std::clamp(v, 0.0f, 1.0f); }
 
@@ -37,21 +35,21 @@ struct BlurSums {
   float fill() const { return view < 1.0f ? std::min(view + hidden, 1.0f) / view : 1.0f; }
 };
 
-// One-sided scatter-as-gather blur of `src` at (x, y) along d with taps 0..T; centre_coc is the
-// pixel's own signed CoC. An off-axis sample is the four texels around it, each tested with its own
-// CoC ("the CoCSize of that pixel") and weighted by its bilinear weight; samples off the image add 0.
-BlurSums blur(const Image& src, int x, int y, Direction d, int taps, float centre_coc) {
+// One-sided scatter-as-gather blur of `src` at (x, y) along d = -g with taps 0..T (on_axis: g is
+// (0, 1), whole texels); centre_coc is the pixel's own signed CoC. An off-axis sample is the four
+// texels around it, each tested with its own CoC ("the CoCSize of that pixel") and weighted by its
+// bilinear weight; samples off the image add 0.
+BlurSums blur(const Image& src, int x, int y, const float* g, bool on_axis, int taps, float centre_coc) {
   BlurSums b{{0.0f, 0.0f, 0.0f}, 0.0f, 0.0f, 0.0f, 0.0f};
   const float* centre = src.px(x, y);
   b.add(centre, hexagon_centre_weight(centre[3]), 1.0f);  // t = 0: the pixel itself
   for (int t = 1; t <= taps; ++t) {
     const float ft = static_cast<float>(t);
-    if (d == Direction::up) {
+    if (on_axis) {
       const float* s = src.px(x, std::min(y + t, src.height - 1));
       b.add(s, y + t <= src.height - 1 ? hexagon_coverage(s[3], ft) : 0.0f, hexagon_rule(s[3], centre_coc));
     } else {
-      const float dx = ft * kHexagonSin60;
-      const SubpixelOffset o = split_offset(d == Direction::downleft ? dx : -dx, ft * -0.5f);
+      const SubpixelOffset o = split_offset(ft * g[0], ft * g[1]);
       const float* texel[4];
       bilinear_texels(src, x, y, o, texel);
       float beta[4];
@@ -67,6 +65,24 @@ BlurSums blur(const Image& src, int x, int y, Direction d, int taps, float centr
 
 }  // namespace
 
+HexagonDirections hexagon_directions(double rotation_deg) {
+  HexagonDirections d{{0.0f, 1.0f}, {kHexagonSin60, -0.5f}, {-kHexagonSin60, -0.5f}, true};
+  const double turn = rotation_deg - 60.0 * std::floor(rotation_deg / 60.0);  // in [0, 60)
+  if (turn == 0.0) return d;
+  // Clockwise on the image (y down): (x, y) -> (x cos a - y sin a, x sin a + y cos a), as Aperture
+  // turns its vertices (aperture.hpp).
+  const double a = turn * 3.14159265358979323846 / 180.0, c = std::cos(a), s = std::sin(a), h = std::sqrt(3.0) / 2;
+  const auto turned = [&](double x, double y, float* out) {
+    out[0] = static_cast<float>(x * c - y * s);
+    out[1] = static_cast<float>(x * s + y * c);
+  };
+  turned(0.0, 1.0, d.up);
+  turned(h, -0.5, d.downleft);
+  turned(-h, -0.5, d.downright);
+  d.up_on_axis = false;
+  return d;
+}
+
 float hexagon_centre_weight(float s) { return 1.0f - std::min(std::abs(s), 1.0f) * 0.5f; }
 
 float hexagon_extent(float s) {
@@ -81,7 +97,7 @@ float hexagon_rule(float s, float c) {
   return c < 0.0f ? 0.0f : clamp01(2.0f * c - s + 1.0f);
 }
 
-HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads) {
+HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads, const HexagonDirections& dirs) {
   if (signed_coc.channels != 4) throw std::invalid_argument("hexagon: input must be RGBA (rgb, signed CoC)");
   if (taps < 0) throw std::invalid_argument("hexagon: taps must be >= 0");
   const int w = signed_coc.width, h = signed_coc.height;
@@ -89,8 +105,8 @@ HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads) {
   parallel_rows(h, threads, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const float c = signed_coc.px(x, y)[3];
-      const BlurSums up = blur(signed_coc, x, y, Direction::up, taps, c);
-      const BlurSums downleft = blur(signed_coc, x, y, Direction::downleft, taps, c);
+      const BlurSums up = blur(signed_coc, x, y, dirs.up, dirs.up_on_axis, taps, c);
+      const BlurSums downleft = blur(signed_coc, x, y, dirs.downleft, false, taps, c);
       float* o1 = p.up.px(x, y);
       float* o2 = p.up_downleft_mean.px(x, y);
       const float up_fill = up.fill(), downleft_fill = downleft.fill();
@@ -105,8 +121,8 @@ HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads) {
   parallel_rows(h, threads, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const float c = signed_coc.px(x, y)[3];
-      const BlurSums r1 = blur(p.up, x, y, Direction::downleft, taps, c);
-      const BlurSums r2 = blur(p.up_downleft_mean, x, y, Direction::downright, taps, c);
+      const BlurSums r1 = blur(p.up, x, y, dirs.downleft, false, taps, c);
+      const BlurSums r2 = blur(p.up_downleft_mean, x, y, dirs.downright, false, taps, c);
       float* o = p.result.px(x, y);
       const float fill1 = r1.fill(), fill2 = r2.fill();
       for (int ch = 0; ch < 3; ++ch) {
@@ -118,8 +134,8 @@ HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads) {
   return p;
 }
 
-Image hexagon_blur(const Image& signed_coc, int taps, int threads) {
-  return std::move(hexagon_passes(signed_coc, taps, threads).result);
+Image hexagon_blur(const Image& signed_coc, int taps, int threads, const HexagonDirections& directions) {
+  return std::move(hexagon_passes(signed_coc, taps, threads, directions).result);
 }
 
 }  // namespace bokeh

@@ -41,6 +41,11 @@
 //     depth-ordered reference fills a hidden surface's share). Without it a blurred foreground keeps a
 //     dark rim inside its edges, where the background it hides would have added light; a sharp pixel
 //     (v = 1) and any pixel the rule hides nothing from (h = 0) are unchanged.
+// Rotation (the aperture blades6 at any rotation): the hexagon turned clockwise by the rotation modulo
+// 60 degrees (a hexagon repeats every 60) is tiled by the same three rhombi with the three directions
+// turned with it. Away from 0 the up blur leaves the pixel grid too, so all three sample bilinearly
+// (at 0 the up blur reads whole texels, as the write-up's does). The directions are floats both sides
+// use as they are, so CPU and GPU still run the same operations.
 // For exactness at radius 0, out2 holds the mean (B_up + B_downleft) / 2 and the result is computed as
 // R1 + (R2 - R1) 2/3 with R1 = B_downleft(out1), R2 = B_downright(out2): the same (R1 + 2 R2) / 3.
 //
@@ -71,13 +76,24 @@ float hexagon_centre_weight(float coc);
 // What a pixel's weights along one direction sum to, its centre's included: |CoC| + centre weight.
 float hexagon_extent(float coc);
 
+// The three gather directions g = -d (unit vectors in image coordinates, y down) as floats: at rotation
+// 0 exactly the write-up's (0, 1), (sqrt3/2, -1/2), (-sqrt3/2, -1/2), otherwise those turned clockwise
+// by rotation_deg modulo 60 degrees.
+struct HexagonDirections {
+  float up[2], downleft[2], downright[2];
+  bool up_on_axis = true;  // up is (0, 1): its taps are whole texels
+};
+HexagonDirections hexagon_directions(double rotation_deg);
+
 struct HexagonPasses {
   Image up, up_downleft_mean;  // pass 1: out1 and out2 / 2 (RGBA: rgb, the weighted mean signed CoC)
   Image result;                // pass 2: RGB
 };
 
 // signed_coc: RGBA from signed_coc_image; taps: T, the largest CoC radius in whole pixels.
-HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads = default_cpu_threads());
-Image hexagon_blur(const Image& signed_coc, int taps, int threads = default_cpu_threads());
+HexagonPasses hexagon_passes(const Image& signed_coc, int taps, int threads = default_cpu_threads(),
+                             const HexagonDirections& directions = hexagon_directions(0.0));
+Image hexagon_blur(const Image& signed_coc, int taps, int threads = default_cpu_threads(),
+                   const HexagonDirections& directions = hexagon_directions(0.0));
 
 }  // namespace bokeh

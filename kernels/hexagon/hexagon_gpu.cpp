@@ -2,6 +2,9 @@
 // operations in the same order (shaders/hexagon/).
 #include "hexagon_gpu.hpp"
 
+#include <bit>
+#include <vector>
+
 #include "vk/memory.hpp"
 #include "vk/spirv.hpp"
 
@@ -15,14 +18,15 @@ constexpr std::uint32_t kOutputs = 4;
 
 class HexagonGpu final : public gpu::GpuFilter {
  public:
-  HexagonGpu(gpu::GpuFrame& frame, int taps)
+  HexagonGpu(gpu::GpuFrame& frame, int taps, const HexagonDirections& d)
       : frame_(frame),
         signed_coc_(frame),
         up_(image_buffer("hexagon pass-1 output 1 (up)")),
         mean_(image_buffer("hexagon pass-1 output 2 (up + down-left) / 2")),
-        first_(frame.ctx, vk::spirv("hexagon/first"), {kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams), {taps}),
+        first_(frame.ctx, vk::spirv("hexagon/first"), {kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
+               constants(taps, d)),
         second_(frame.ctx, vk::spirv("hexagon/second"), {kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
-                {taps}) {
+                constants(taps, d)) {
     first_.bind(0, signed_coc_.buffer);
     first_.bind(1, up_);
     first_.bind(2, mean_);
@@ -45,6 +49,17 @@ class HexagonGpu final : public gpu::GpuFilter {
   }
 
  private:
+  // TAPS, then the directions (their float bits) and whether up is on the grid: hexagon.glsl's ids 1..7.
+  static std::vector<std::int32_t> constants(int taps, const HexagonDirections& d) {
+    return {taps,
+            std::bit_cast<std::int32_t>(d.up[0]),
+            std::bit_cast<std::int32_t>(d.up[1]),
+            std::bit_cast<std::int32_t>(d.downleft[0]),
+            std::bit_cast<std::int32_t>(d.downleft[1]),
+            std::bit_cast<std::int32_t>(d.downright[0]),
+            std::bit_cast<std::int32_t>(d.downright[1]),
+            d.up_on_axis ? 1 : 0};
+  }
   vk::Buffer image_buffer(const char* what) {
     return vk::make_storage_buffer(frame_.ctx, static_cast<VkDeviceSize>(frame_.width()) * frame_.height() * 16, what);
   }
@@ -56,8 +71,8 @@ class HexagonGpu final : public gpu::GpuFilter {
 
 }  // namespace
 
-std::unique_ptr<gpu::GpuFilter> make_hexagon_gpu(gpu::GpuFrame& frame, int taps) {
-  return std::make_unique<HexagonGpu>(frame, taps);
+std::unique_ptr<gpu::GpuFilter> make_hexagon_gpu(gpu::GpuFrame& frame, int taps, const HexagonDirections& directions) {
+  return std::make_unique<HexagonGpu>(frame, taps, directions);
 }
 
 }  // namespace bokeh

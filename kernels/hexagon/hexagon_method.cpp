@@ -14,6 +14,8 @@ namespace {
 // The blurs reach the pattern's largest CoC k (N - 1) / 2, in whole pixels (the soft edge gives a
 // CoC r weight up to t < r + 1, so an integer largest radius needs no further tap).
 int taps_of(const FilterOptions& o) { return static_cast<int>(o.pattern.max_radius_px()); }
+// The blur directions: the aperture's rotation (the disc: the hexagon at rotation 0).
+HexagonDirections directions_of(const FilterOptions& o) { return hexagon_directions(o.aperture.rotation_deg); }
 
 }  // namespace
 
@@ -25,22 +27,22 @@ void declare_hexagon(std::vector<Method>& methods) {
   m.precisions = {"f32"};
   m.samples_pattern = false;  // the blurs depend on the largest radius only
   // Its rhombi tile a hexagon of circumradius r with vertices straight up and down (hexagon.hpp): the
-  // aperture blades6 at rotation 0 (or any multiple of 60 degrees, the same hexagon), straight blades.
-  // The disc stays accepted as before, approximated by that hexagon and scored against the disc, so
-  // the sweeps over the disc keep it; blades6 scores it against its own shape (issue 23).
+  // aperture blades6 with straight blades, at rotation 0 or, turning the three directions with it, any
+  // other (hexagon_directions). The disc stays accepted as before, approximated by the hexagon at 0 and
+  // scored against the disc, so the sweeps over the disc keep it; blades6 scores it against its own
+  // shape (issue 23).
   m.aperture_unsupported = [](const FilterOptions& o) -> std::string {
     const Aperture& a = o.aperture;
-    if (a.is_disc()) return "";
-    const double sixths = a.rotation_deg / 60.0;
-    if (a.blades == 6 && a.curvature == 0 && std::abs(sixths - std::round(sixths)) < 1e-9) return "";
-    return "hexagon draws a hexagon with a vertex up (blades6 at a rotation that is a multiple of 60 degrees, straight "
-           "blades), not the aperture " + a.name();
+    if (a.is_disc() || (a.blades == 6 && a.curvature == 0)) return "";
+    return "hexagon draws a hexagon (blades6 at any rotation, straight blades), not the aperture " + a.name();
   };
   m.cpu_reference = [](const CpuInput& in) {
     const Image input = signed_coc_image(in.color, in.radius_px, in.depth_m, static_cast<float>(in.lens.focus_distance_m));
-    return hexagon_blur(input, taps_of(in.options), in.threads);
+    return hexagon_blur(input, taps_of(in.options), in.threads, directions_of(in.options));
   };
-  m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) { return make_hexagon_gpu(frame, taps_of(o)); };
+  m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) {
+    return make_hexagon_gpu(frame, taps_of(o), directions_of(o));
+  };
   // Per pixel: pass 1 evaluates T + 1 samples up (one texel each) and T + 1 down-left (bilinear, four
   // texels); pass 2 T + 1 down-left and T + 1 down-right (bilinear), and reads the pixel's own CoC.
   // Taps count samples (a bilinear one as one), as the other methods count theirs.

@@ -1,5 +1,6 @@
 // naive: the quadratic gather of the FLAG paper, section 3.1.
-#include <fmt/format.h>
+#include <optional>
+#include <string>
 
 #include "coc_tiles_gpu.hpp"
 #include "method.hpp"
@@ -34,23 +35,23 @@ void declare_naive(std::vector<Method>& methods) {
     return needs;
   };
   // Any aperture (issue 23): a shape test per sample against the aperture's gauge of its offset, weights
-  // 1 / the shape's area on the pattern (naive_shape.hpp). The shape's gather is the plain one: the
-  // tile map of adaptive bounds by the disc index, and is not wired to it.
-  m.aperture_unsupported = [](const FilterOptions& o) -> std::string {
-    if (o.aperture.is_disc() || !naive_config(o).adaptive) return "";
-    return fmt::format("naive with adaptive = on draws the disc only, not the aperture {} (adaptive = off draws it)",
-                       o.aperture.name());
-  };
+  // 1 / the shape's area on the pattern (naive_shape.hpp). Adaptive = on too: every shape lies inside
+  // the disc of its radius (exactly, in floats: ShapeLattice), so the tile map's disc bound holds for it
+  // and the image is adaptive = off's, bit for bit.
+  m.aperture_unsupported = [](const FilterOptions&) { return std::string(); };
   m.cpu_reference = [](const CpuInput& in) {
+    const NaiveConfig c = naive_config(in.options);
+    std::optional<CocTiles> tiles;
+    if (c.adaptive) {
+      tiles = coc_tiles(in.packed, in.options.pattern, c.adaptive_tile_px);
+      if (in.stats)
+        (*in.stats)["adaptive"] = coc_tiles_stats(*tiles, in.options.pattern, in.packed.width, in.packed.height);
+    }
+    const CocTiles* bound = tiles ? &*tiles : nullptr;
     if (!in.options.aperture.is_disc())
       return naive_shape_gather(in.color, in.radius_px, ShapeLattice(in.options.aperture, in.options.pattern),
-                                in.options.pattern, in.threads);
-    const NaiveConfig c = naive_config(in.options);
-    if (!c.adaptive) return naive_gather(in.packed, in.options.pattern, in.threads);
-    const CocTiles tiles = coc_tiles(in.packed, in.options.pattern, c.adaptive_tile_px);
-    if (in.stats)
-      (*in.stats)["adaptive"] = coc_tiles_stats(tiles, in.options.pattern, in.packed.width, in.packed.height);
-    return naive_gather(in.packed, in.options.pattern, in.threads, &tiles);
+                                in.options.pattern, in.threads, bound);
+    return naive_gather(in.packed, in.options.pattern, in.threads, bound);
   };
   m.make_gpu = make_naive_gpu;
   // Every pixel tests all N x N samples; it reads the packed image and writes the output once.
@@ -61,39 +62,40 @@ void declare_naive(std::vector<Method>& methods) {
     const NaiveConfig c = naive_config(o);
     const double pixels = static_cast<double>(w) * h;
     std::vector<PassWork> work;
-    if (!o.aperture.is_disc()) {  // the weights (colour and radius in, binary search), then the gather
-      work.push_back({"shape_pack", pixels, pixels * 32, pixels * 16});
-      work.push_back({"gather", pixels * o.pattern.samples_per_pixel(), pixels * 16, pixels * 16});
-      return work;
-    }
     if (c.adaptive) {
       const int t = c.adaptive_tile_px, range = tile_reach_range(o.pattern, t);
       const double tiles = static_cast<double>((w + t - 1) / t) * ((h + t - 1) / t);
       work.push_back({"tile_max", pixels, pixels * 16, tiles * 16});
       work.push_back({"tile_reach", tiles * (2 * range + 1) * (2 * range + 1), tiles * 16, tiles * 16});
     }
+    // Any other aperture: the weights first (colour and radius in, a binary search in the sorted gauges).
+    if (!o.aperture.is_disc()) work.push_back({"shape_pack", pixels, pixels * 32, pixels * 16});
     work.push_back({"gather", pixels * o.pattern.samples_per_pixel(), pixels * 16, pixels * 16});
     return work;
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context*) {
     const NaiveConfig c = naive_config(o);
     MemoryUse use;
+    const std::uint64_t tile_map = c.adaptive ? gpu::CocTilesGpu::bytes(w, h, c.adaptive_tile_px) : 0;
+    use.bytes = tile_map;
+    use.details = {{"tile_map_bytes", tile_map}};
     if (!o.aperture.is_disc()) {  // the shape-weighted colour (vec4 a pixel) and two float tables of N x N
       const auto side = static_cast<std::uint64_t>(o.pattern.size_n);
-      use.bytes = static_cast<std::uint64_t>(w) * h * 16 + 2 * side * side * 4;
-      use.details = {{"weighted_bytes", static_cast<std::uint64_t>(w) * h * 16}, {"gauge_tables_bytes", 2 * side * side * 4}};
-      return use;
+      const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16, tables = 2 * side * side * 4;
+      use.bytes += weighted + tables;
+      use.details["weighted_bytes"] = weighted;
+      use.details["gauge_tables_bytes"] = tables;
     }
-    if (c.adaptive) use.bytes = gpu::CocTilesGpu::bytes(w, h, c.adaptive_tile_px);
-    use.details = {{"tile_map_bytes", use.bytes}};
     return use;
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
-    if (!o.aperture.is_disc()) return static_cast<std::uint64_t>(w) * h * 16;  // the weighted colour
     const NaiveConfig c = naive_config(o);
-    if (!c.adaptive) return std::uint64_t{0};
-    const auto t = static_cast<std::uint64_t>(c.adaptive_tile_px);
-    return (static_cast<std::uint64_t>(w) + t - 1) / t * ((static_cast<std::uint64_t>(h) + t - 1) / t) * 8;
+    std::uint64_t bytes = o.aperture.is_disc() ? 0 : static_cast<std::uint64_t>(w) * h * 16;  // the weighted colour
+    if (c.adaptive) {
+      const auto t = static_cast<std::uint64_t>(c.adaptive_tile_px);
+      bytes += (static_cast<std::uint64_t>(w) + t - 1) / t * ((static_cast<std::uint64_t>(h) + t - 1) / t) * 8;
+    }
+    return bytes;
   };
   // The same sums in the same order as the CPU: only f32 rounding of the GPU's fused operations.
   m.gpu_tolerance = [](const FilterOptions&) { return 1e-5; };

@@ -1,6 +1,7 @@
 #include "sprites.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "naive_gather.hpp"
@@ -18,6 +19,11 @@ nlohmann::json to_json(const SpriteStats& s) {
 
 float sprite_luminance(const float* rgb) { return 0.299f * rgb[0] + 0.587f * rgb[1] + 0.114f * rgb[2]; }
 
+ShapeLattice sprite_shape_lattice(const Aperture& aperture, const GatherPattern& pattern) {
+  const int max_px = static_cast<int>(pattern.max_radius_px());
+  return ShapeLattice(aperture, GatherPattern{2 * max_px + 1, 1});
+}
+
 int disc_pixel_count(float radius_px) {
   const float r2 = radius_px * radius_px;
   const int f = static_cast<int>(radius_px);
@@ -29,7 +35,8 @@ int disc_pixel_count(float radius_px) {
   return count;
 }
 
-SpriteDetection detect_sprites(const Image& color, const Image& packed, const SpriteSettings& s) {
+SpriteDetection detect_sprites(const Image& color, const Image& packed, const SpriteSettings& s,
+                               const ShapeLattice* shape) {
   if (color.channels < 3 || packed.channels != 4 || color.width != packed.width || color.height != packed.height)
     throw std::invalid_argument("sprites: colour (3+ channels) and packed input (4 channels) must match in size");
   SpriteDetection out;
@@ -60,7 +67,8 @@ SpriteDetection detect_sprites(const Image& color, const Image& packed, const Sp
       ++out.stats.drawn;
       Sprite sprite;
       sprite.x_px = x, sprite.y_px = y, sprite.radius_px = r;
-      const int count = disc_pixel_count(r);
+      // The shape's offsets all lie in the quad (ShapeLattice: inside the disc), so the quad draws them all.
+      const int count = shape ? shape->area(r) : disc_pixel_count(r);
       sprite.pixel_count = static_cast<float>(count);
       const float inv = 1.0f / static_cast<float>(count);
       for (int ch = 0; ch < 3; ++ch) sprite.rgb_per_pixel[ch] = c[ch] * inv;
@@ -73,16 +81,22 @@ SpriteDetection detect_sprites(const Image& color, const Image& packed, const Sp
   return out;
 }
 
-void splat_sprites(Image& image, const std::vector<Sprite>& sprites, int threads) {
+void splat_sprites(Image& image, const std::vector<Sprite>& sprites, int threads, const ShapeLattice* shape) {
   if (image.channels < 3) throw std::invalid_argument("sprites: the image needs 3+ channels");
+  const int half = shape ? (shape->side - 1) / 2 : 0;
+  // What shaders/sprites/quad.frag tests: the disc, or the shape's table at the offset.
+  const auto inside = [&](const Sprite& s, int dx, int dy) {
+    if (!shape) return in_disc(s.radius_px * s.radius_px, dx, dy);
+    if (std::abs(dx) > half || std::abs(dy) > half) return false;
+    return shape->gauge[static_cast<std::size_t>(dy + half) * shape->side + (dx + half)] <= s.radius_px;
+  };
   parallel_rows(image.height, threads, [&](int y) {
     for (const Sprite& s : sprites) {
       const int f = static_cast<int>(s.radius_px), dy = y - s.y_px;
       if (dy < -f || dy > f) continue;
-      const float r2 = s.radius_px * s.radius_px;
       for (int dx = -f; dx <= f; ++dx) {
         const int x = s.x_px + dx;
-        if (x < 0 || x >= image.width || !in_disc(r2, dx, dy)) continue;
+        if (x < 0 || x >= image.width || !inside(s, dx, dy)) continue;
         float* o = image.px(x, y);
         for (int ch = 0; ch < 3; ++ch) o[ch] += s.rgb_per_pixel[ch];
       }
@@ -91,10 +105,28 @@ void splat_sprites(Image& image, const std::vector<Sprite>& sprites, int threads
 }
 
 Image sprite_bokeh(const Image& color, const Image& packed, const GatherPattern& pattern, const SpriteSettings& settings,
-                   int threads, SpriteStats* stats) {
-  SpriteDetection detection = detect_sprites(color, packed, settings);
-  Image out = naive_gather(detection.rest, pattern, threads);
-  splat_sprites(out, detection.sprites, threads);
+                   int threads, SpriteStats* stats, const Aperture& aperture) {
+  if (aperture.is_disc()) {
+    SpriteDetection detection = detect_sprites(color, packed, settings);
+    Image out = naive_gather(detection.rest, pattern, threads);
+    splat_sprites(out, detection.sprites, threads);
+    if (stats) *stats = detection.stats;
+    return out;
+  }
+  const ShapeLattice shape = sprite_shape_lattice(aperture, pattern);
+  SpriteDetection detection = detect_sprites(color, packed, settings, &shape);
+  // naive's shape gather of the rest: the colour with the sprites' taken out (the GPU zeroes them in
+  // the gather's weighted input, which gives the same zeros), the radii of the packed input.
+  Image rest(color.width, color.height, 3), radius(color.width, color.height, 1);
+  for (int y = 0; y < color.height; ++y)
+    for (int x = 0; x < color.width; ++x) {
+      for (int c = 0; c < 3; ++c) rest.px(x, y)[c] = color.px(x, y)[c];
+      *radius.px(x, y) = packed.px(x, y)[3];
+    }
+  for (const Sprite& s : detection.sprites)
+    for (int c = 0; c < 3; ++c) rest.px(s.x_px, s.y_px)[c] = 0.0f;
+  Image out = naive_shape_gather(rest, radius, ShapeLattice(aperture, pattern), pattern, threads);
+  splat_sprites(out, detection.sprites, threads, &shape);
   if (stats) *stats = detection.stats;
   return out;
 }

@@ -20,13 +20,23 @@
 //      the gathers keep it). A rasteriser covers a pixel when its centre lies inside the quad; the
 //      quad's edges lie on pixel boundaries, so no centre lies on an edge and the tie-breaking rule
 //      never applies: the GPU covers exactly the pixels this reference loops over.
+//
+// Any other aperture (issue 23): the sprite is the shape of circumradius r, a pixel at offset
+// (dx, dy) lit when the aperture's gauge there is <= r, read from a table of every offset up to the
+// pattern's largest radius (sprite_shape_lattice: naive's ShapeLattice at spacing 1, its floats
+// uploaded as they are, so CPU and GPU test the same numbers), weight 1 / (the offsets the shape
+// holds): the exact reference's shape, sampled at pixel centres as the gathers sample it. The shape
+// lies inside its disc (ShapeLattice's guarantee), so inside the same quad. The gather of the rest is
+// naive's shape gather, the sprites' colour taken out of its weighted input.
 #include <cstdint>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "aperture.hpp"
 #include "gather_pattern.hpp"
 #include "image.hpp"
+#include "naive_shape.hpp"
 #include "parallel.hpp"
 
 namespace bokeh {
@@ -41,7 +51,7 @@ struct SpriteSettings {
 struct Sprite {
   std::int32_t x_px = 0, y_px = 0;
   float radius_px = 0;
-  float pixel_count = 0;             // pixels of its disc
+  float pixel_count = 0;             // pixels of its disc (or shape)
   float rgb_per_pixel[4] = {0, 0, 0, 0};  // colour / pixel_count
 };
 static_assert(sizeof(Sprite) == 32, "Sprite must match the shaders' std430 layout");
@@ -56,6 +66,12 @@ struct SpriteStats {
 // The point's statistics as the GPU driver reports them too (GpuFilter::stats).
 nlohmann::json to_json(const SpriteStats& stats);
 
+// The table a non-disc sprite reads: the aperture's gauge at every integer offset within the pattern's
+// largest radius M = n k (quads never reach further: radii are clamped to it). (2 M + 1)^2 floats,
+// twice (as listed and sorted): kMaxShapeSpriteRadiusPx bounds M.
+ShapeLattice sprite_shape_lattice(const Aperture& aperture, const GatherPattern& pattern);
+constexpr int kMaxShapeSpriteRadiusPx = 256;  // 513^2 floats a table, 2 MiB for both
+
 // L = 0.299 R + 0.587 G + 0.114 B, as the shader computes it.
 float sprite_luminance(const float* rgb);
 // Pixels of the disc of radius r: integer offsets (dx, dy) with dx^2 + dy^2 <= r^2.
@@ -67,14 +83,19 @@ struct SpriteDetection {
   SpriteStats stats;
 };
 // color: 3+ channels; packed: RGBA (rgb / gather area, radius px) from pack_gather_input.
-SpriteDetection detect_sprites(const Image& color, const Image& packed, const SpriteSettings& settings);
+// shape: null for the disc, else sprite_shape_lattice's table (pixel_count: the offsets it holds).
+SpriteDetection detect_sprites(const Image& color, const Image& packed, const SpriteSettings& settings,
+                               const ShapeLattice* shape = nullptr);
 
-// Adds each sprite's disc to `image` (3+ channels), pixels outside the image dropped; at every pixel
-// the sprites are added in list order.
-void splat_sprites(Image& image, const std::vector<Sprite>& sprites, int threads = default_cpu_threads());
+// Adds each sprite's disc (or shape) to `image` (3+ channels), pixels outside the image dropped; at
+// every pixel the sprites are added in list order.
+void splat_sprites(Image& image, const std::vector<Sprite>& sprites, int threads = default_cpu_threads(),
+                   const ShapeLattice* shape = nullptr);
 
-// The method: detection, the naive gather of the rest, the sprites added over it. Returns RGB.
+// The method: detection, the naive gather of the rest (naive's shape gather for a non-disc aperture),
+// the sprites added over it. Returns RGB.
 Image sprite_bokeh(const Image& color, const Image& packed, const GatherPattern& pattern,
-                   const SpriteSettings& settings, int threads = default_cpu_threads(), SpriteStats* stats = nullptr);
+                   const SpriteSettings& settings, int threads = default_cpu_threads(), SpriteStats* stats = nullptr,
+                   const Aperture& aperture = {});
 
 }  // namespace bokeh

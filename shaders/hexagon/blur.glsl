@@ -14,7 +14,7 @@ void BLUR_NAME(int x0, int y, const int direction, float centre_coc[OUTPUTS], ou
   }
   for (int t = 1; t <= TAPS; ++t) {
     const float ft = float(t);
-    if (direction == HEX_UP) {
+    if (direction == HEX_UP && HEX_UP_ON_AXIS != 0) {
       const bool inside = y + t <= params.height_px - 1;
       const uint tap_row = uint(clamp_y(y + t) * params.width_px);
       for (int j = 0; j < OUTPUTS; ++j) {
@@ -22,8 +22,7 @@ void BLUR_NAME(int x0, int y, const int direction, float centre_coc[OUTPUTS], ou
         blur_add(sums[j], s, inside ? hexagon_coverage(s.a, ft) : 0.0, hexagon_rule(s.a, centre_coc[j]));
       }
     } else {
-      precise const float dx = ft * HEX_SIN60;
-      precise const vec2 d = vec2(direction == HEX_DOWNLEFT ? dx : -dx, ft * -0.5);
+      precise const vec2 d = ft * hex_direction(direction);  // (ft gx, ft gy): the CPU's products
       precise const vec2 whole_f = floor(d);
       precise const vec2 f = d - whole_f;  // split_offset()
       const ivec2 whole = ivec2(whole_f);

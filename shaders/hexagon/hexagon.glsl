@@ -3,6 +3,21 @@
 const float HEX_SIN60 = 0.866025388240814208984375;   // sqrt(3) / 2 as a float
 const float HEX_TWO_THIRDS = 0.666666686534881591796875;
 const int HEX_UP = 0, HEX_DOWNLEFT = 1, HEX_DOWNRIGHT = 2;
+// The gather directions g (HexagonDirections in kernels/hexagon/hexagon.hpp): the write-up's at
+// rotation 0, turned with the aperture otherwise, where up leaves the grid too (HEX_UP_ON_AXIS 0).
+// Specialisation constants 1..7, after TAPS; floats travel as their bits.
+layout(constant_id = 1) const float HEX_UP_X = 0.0;
+layout(constant_id = 2) const float HEX_UP_Y = 1.0;
+layout(constant_id = 3) const float HEX_DOWNLEFT_X = 0.866025388240814208984375;
+layout(constant_id = 4) const float HEX_DOWNLEFT_Y = -0.5;
+layout(constant_id = 5) const float HEX_DOWNRIGHT_X = -0.866025388240814208984375;
+layout(constant_id = 6) const float HEX_DOWNRIGHT_Y = -0.5;
+layout(constant_id = 7) const int HEX_UP_ON_AXIS = 1;
+vec2 hex_direction(const int direction) {
+  return direction == HEX_UP ? vec2(HEX_UP_X, HEX_UP_Y)
+                             : direction == HEX_DOWNLEFT ? vec2(HEX_DOWNLEFT_X, HEX_DOWNLEFT_Y)
+                                                         : vec2(HEX_DOWNRIGHT_X, HEX_DOWNRIGHT_Y);
+}
 const int OUTPUTS = 4;  // adjacent pixels per invocation; kernels/hexagon/hexagon_gpu.cpp dispatches for it
 
 // hexagon_coverage() and hexagon_rule() of hexagon.cpp: the soft edge (full at |s| >= t, none at

@@ -6,6 +6,9 @@
 // input (packed rgb = 0, in place: the CoC pass rewrites it every frame). Past MAX_SPRITES the pixel
 // is counted as overflow and stays in the gather. The same float operations, in the same order, as
 // kernels/sprites/sprites.cpp (`precise`: no fused multiply-adds), so both detect the same pixels.
+// SHAPE (a non-disc aperture): binding 1 is naive's shape-weighted input (colour / shape area, radius),
+// whose sprites' colour this pass takes out in the same way, and a sprite's pixel count is how many
+// of the sorted gauges (binding 4, SHAPE_OFFSETS of them) are <= its radius (ShapeLattice::area).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "sprite.glsl"
@@ -26,6 +29,10 @@ layout(std430, binding = 2) buffer Counters {
   uint quad_pixels_high;  // a 64-bit count carried by hand
 } counters;
 layout(std430, binding = 3) writeonly buffer Sprites { Sprite sprites[]; };
+#if SHAPE
+layout(constant_id = 3) const int SHAPE_OFFSETS = 1;
+layout(std430, binding = 4) readonly buffer Sorted { float sorted_gauge[]; };
+#endif
 
 precise float luminance(vec3 c) { return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b; }
 
@@ -52,13 +59,22 @@ void main() {
     atomicAdd(counters.overflowed, 1u);
     return;
   }
-  const float r2 = r * r;
   const int f = quad_half_px(r);
+#if SHAPE
+  int count = 0, hi = SHAPE_OFFSETS;  // upper bound: the first gauge > r
+  while (count < hi) {
+    const int mid = (count + hi) / 2;
+    if (sorted_gauge[mid] <= r) count = mid + 1;
+    else hi = mid;
+  }
+#else
+  const float r2 = r * r;
   int count = 0;
   for (int dx = -f; dx <= f; ++dx) {
     const int z = disc_reach_layer(r2, dx, 1, f);
     if (z >= 0) count += 2 * z + 1;
   }
+#endif
   const uint quad = uint(2 * f + 1) * uint(2 * f + 1);
   if (atomicAdd(counters.quad_pixels_low, quad) + quad < quad) atomicAdd(counters.quad_pixels_high, 1u);
   precise const vec3 rgb = c * (1.0 / float(count));

@@ -8,11 +8,12 @@ layout(std430, binding = 0) readonly buffer Sprites { Sprite sprites[]; };
 layout(push_constant) uniform Target {
   int width_px;
   int height_px;
+  int shape_half_px;  // the fragment shader's (non-disc apertures)
 } target;
 
 layout(location = 0) flat out vec3 rgb_per_pixel;
 layout(location = 1) flat out ivec2 centre_px;
-layout(location = 2) flat out float radius_sq;
+layout(location = 2) flat out float radius_px;
 
 void main() {
   const Sprite s = sprites[gl_InstanceIndex];
@@ -25,5 +26,5 @@ void main() {
   gl_Position = vec4(edge_px / vec2(target.width_px, target.height_px) * 2.0 - 1.0, 0.0, 1.0);
   rgb_per_pixel = s.rgb_per_pixel.rgb;
   centre_px = s.pixel_px;
-  radius_sq = s.radius_px * s.radius_px;
+  radius_px = s.radius_px;
 }

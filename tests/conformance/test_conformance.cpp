@@ -9,8 +9,9 @@
 //   the input's (methods that declare they conserve it), up to storage_tolerance x the largest value
 //   on every output value.
 // Apertures (issue 23): each method that declares it can draw a non-disc aperture runs every check
-// above at its defaults with each of a pentagon pointing up (not vertically symmetric), a hexagon,
-// and rotated curved blades, the lens carrying the same aperture.
+// above at its defaults with each of a pentagon pointing up (not vertically symmetric), a hexagon at
+// rotation 0 and at 15 degrees (off its 60-degree grid), and rotated curved blades, the lens carrying
+// the same aperture (and with adaptive = on, where a method has that option and draws the shape).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -68,10 +69,15 @@ std::vector<Config> all_configs() {
           }
       }
   for (const Method& m : registered_methods())
-    for (const char* shape : {"blades5", "blades6", "blades7-rot20-curv0.5"}) {
+    for (const char* shape : {"blades5", "blades6", "blades6-rot15", "blades7-rot20-curv0.5"}) {
       FilterOptions o = m.defaults({9, 2});
       o.aperture = parse_aperture(shape);
       if (aperture_unsupported(m, o).empty()) configs.push_back({&m, o});
+      // adaptive = on too, where the method draws the shape with it (its tile map's bound must hold).
+      if (const OptionSpec* adaptive = m.option("adaptive"); adaptive && adaptive->choices.size() == 2) {
+        o.values["adaptive"] = 1;
+        if (aperture_unsupported(m, o).empty()) configs.push_back({&m, o});
+      }
     }
   return configs;
 }
