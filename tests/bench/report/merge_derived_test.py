@@ -4,9 +4,10 @@ figure9 run's points split into three shards (naive and FLAG of one N and backen
 keeps them), their derived figures deleted, merged; the merged file's naive/FLAG ratios, growth exponents
 and headlines equal those the figure9 command derived over the same points in the same run (the same
 samples: deterministic, the bootstrap is seeded), and equal the unsharded file merged alone (1/1).
-A sweep merge knows no derivation for says so in its output and JSON.
+The same for adaptive's speed-ups (off and on of one configuration in one shard). A sweep merge knows no
+derivation for says so in its output and JSON.
 
-usage: merge_derived_test.py BOKEHBENCH WORKDIR FIGURE9_JSON
+usage: merge_derived_test.py BOKEHBENCH WORKDIR FIGURE9_JSON ADAPTIVE_JSON
 """
 import copy
 import json
@@ -35,9 +36,9 @@ def figures(doc):
     return out
 
 
-def shard_file(work, base, name, shard, points):
+def shard_file(work, base, name, shard, points, derived=DERIVED):
     doc = copy.deepcopy(base)
-    for k in DERIVED:
+    for k in derived:
         doc.pop(k, None)  # merge must compute them, not carry a shard's
     doc["config"]["shard"] = shard
     doc["points"] = points
@@ -47,7 +48,24 @@ def shard_file(work, base, name, shard, points):
     return str(path)
 
 
-def main(bokehbench, workdir, figure9_json):
+def adaptive_check(bokehbench, work, adaptive_json):
+    base = json.loads(pathlib.Path(adaptive_json).read_text())
+    assert base["comparisons"], "the adaptive run has no comparisons to check against"
+    off_of = lambda p: p["id"].replace('/adaptive:"on"', "")  # off and on of one configuration together
+    keys = sorted({off_of(p) for p in base["points"]})
+    assert len(keys) >= 3, keys
+    shards = [[p for p in base["points"] if keys.index(off_of(p)) % 3 == i] for i in range(3)]
+    files = [shard_file(work, base, f"adaptive{i + 1}.json", f"{i + 1}/3", shards[i], ("comparisons",)) for i in range(3)]
+    merged = work / "adaptive_merged.json"
+    out = run([bokehbench, "merge", files[1], files[2], files[0], "--out", str(merged)]).stdout
+    assert "derived figures recomputed over all points" in out, out
+    got = sorted(json.loads(merged.read_text())["comparisons"], key=lambda c: c["off_id"])
+    want = sorted(base["comparisons"], key=lambda c: c["off_id"])
+    assert got == want, "adaptive: merged shards' comparisons differ from the command's own"
+    print(f"adaptive, 3 shards: {len(got)} speed-ups (paired, with intervals) equal the command's")
+
+
+def main(bokehbench, workdir, figure9_json, adaptive_json):
     work = pathlib.Path(workdir)
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
@@ -72,6 +90,8 @@ def main(bokehbench, workdir, figure9_json):
     print(f"3 shards ({[len(s) for s in shards]} points): {len(got['naive_over_flag'])} naive/FLAG ratios and "
           f"{len(got['series'])} curves' exponents equal the command's and the unsharded computation's")
 
+    adaptive_check(bokehbench, work, adaptive_json)
+
     # A sweep merge has no derivation for: merged, and said so.
     other = copy.deepcopy(base)
     other["schema"] = "bokehbench.unknown_sweep"
@@ -89,6 +109,6 @@ def main(bokehbench, workdir, figure9_json):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4:
+    if len(sys.argv) != 5:
         sys.exit(__doc__)
     main(*sys.argv[1:])
