@@ -24,7 +24,8 @@ struct AbOptions {
 };
 
 // Both builds' samples into the results store, as two runs of sweep "ab-<sweep>" (their own series:
-// paired samples of CI's check are not pooled with a sweep's), each under its own commit and context.
+// paired samples of CI's check are not pooled with a sweep's), each under its own commit and context;
+// the candidate's run also holds the paired new / old ratio per point (headline figures new_over_old/ID).
 void append_builds(const compare::Report& report, const AbOptions& o) {
   if (!report.mismatches.empty() || o.run.inject_slowdown_pct > 0) return;  // nothing measured, or a test
   auto store = history::Store::open(o.store, true);
@@ -44,8 +45,19 @@ void append_builds(const compare::Report& report, const AbOptions& o) {
                                {"samples_ms", p.wall_ms[side]},
                                {"samples_cpu_ms", p.cpu_ms[side]}});
     }
-    const auto id = store->append(history::run_of(doc, command_line(), side == 0 ? "ab baseline" : "ab candidate"),
-                                  history::points_of(doc));
+    // The candidate's run carries the paired comparison itself (new / old per point, with its interval):
+    // the series CI's check reads over commits, a few percent wide where a point's own median moves 12-17%.
+    if (side == 1) {
+      doc["paired_ratios"] = nlohmann::json::array();
+      for (const auto& p : report.points) {
+        const compare::Judgement& j = p.judgement;
+        if (!(j.ratio_of_medians > 0)) continue;
+        nlohmann::json r = {{"id", p.id}, {"ratio", j.ratio_of_medians}, {"times", p.times}};
+        if (j.interval.exists) r.update({{"low", j.interval.low}, {"high", j.interval.high}});
+        doc["paired_ratios"].push_back(std::move(r));
+      }
+    }
+    const auto id = store->append_document(doc, command_line(), side == 0 ? "ab baseline" : "ab candidate");
     fmt::print("appended the {} build's samples as run {} to the results store {}\n", side == 0 ? "baseline" : "candidate",
                id, store->url());
   }

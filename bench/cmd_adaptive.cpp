@@ -168,7 +168,7 @@ void adaptive(AdaptiveOptions& o) {
     return fmt::format("{}/{}/{}/{}/{}", p.method->name, p.scene, p.resolution.text(), p.max_coc_px, o.precision) +
            nlohmann::json(o.values).dump();
   };
-  s.derive = [](nlohmann::json& doc) { doc["comparisons"] = comparisons_json(doc["points"]); };
+  s.derive = derive_adaptive;
   s.summary = [](const nlohmann::json& doc) {
     fmt::print("\n{:<18} {:>7} {:<8} {:>9} {:>9} {:>8} {:>17} {:>12} {:>12} {:>8} {:>10} {:>10}\n", "scene",
                "max CoC", "method", "off ms", "on ms", "speed-up", "(paired, 95%)", "off alloc", "on alloc", "saved",
@@ -192,6 +192,8 @@ void adaptive(AdaptiveOptions& o) {
 }
 
 }  // namespace
+
+void derive_adaptive(nlohmann::json& doc) { doc["comparisons"] = comparisons_json(doc["points"]); }
 
 void add_adaptive_command(CLI::App& app) {
   auto o = std::make_shared<AdaptiveOptions>();

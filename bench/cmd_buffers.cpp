@@ -113,23 +113,7 @@ void buffers(BuffersOptions& o) {
                        p.options.precision);
   };
   const std::vector<double> lines = o.budget_lines_mib;
-  s.derive = [lines](nlohmann::json& doc) {
-    for (auto& p : doc["points"]) {
-      if (!is_streamed(p)) continue;
-      for (const auto& full : doc["points"])
-        if (!is_streamed(full) && full["buffer_scale"] == 1 && full["variant"] == "" && frame_key(full) == frame_key(p))
-          p["streamed_vs_full"] = streamed_vs_full(p, full);
-    }
-    for (auto& p : doc["points"]) {
-      p["fits_mib"] = nlohmann::json::array();
-      for (double mib : lines)
-        if (allocated_mib(p) <= mib) p["fits_mib"].push_back(mib);
-      double flag_ms = 0;  // the CoC pass is the same for every configuration of a resolution and N
-      for (const auto& [pass, ms] : p["pass_ms"].items())
-        if (pass != "coc") flag_ms += ms.get<double>();
-      p["flag_passes_ms"] = flag_ms;
-    }
-  };
+  s.derive = derive_buffers;  // reads the budget lines from config (as merge does)
   s.summary = [lines](const nlohmann::json& doc) {
     // Every point (and every skip) by frame: the memory / time / accuracy trade in one table.
     fmt::print("\n{:<66} {:>10} {:>10} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms", "PSNR", "vs f32", "streamed/full");
@@ -179,6 +163,25 @@ void buffers(BuffersOptions& o) {
 }
 
 }  // namespace
+
+void derive_buffers(nlohmann::json& doc) {
+  const std::vector<double> lines = doc.at("config").at("budget_lines_mib").get<std::vector<double>>();
+  for (auto& p : doc["points"]) {
+    if (!is_streamed(p)) continue;
+    for (const auto& full : doc["points"])
+      if (!is_streamed(full) && full["buffer_scale"] == 1 && full["variant"] == "" && frame_key(full) == frame_key(p))
+        p["streamed_vs_full"] = streamed_vs_full(p, full);
+  }
+  for (auto& p : doc["points"]) {
+    p["fits_mib"] = nlohmann::json::array();
+    for (double mib : lines)
+      if (allocated_mib(p) <= mib) p["fits_mib"].push_back(mib);
+    double flag_ms = 0;  // the CoC pass is the same for every configuration of a resolution and N
+    for (const auto& [pass, ms] : p["pass_ms"].items())
+      if (pass != "coc") flag_ms += ms.get<double>();
+    p["flag_passes_ms"] = flag_ms;
+  }
+}
 
 void add_buffers_command(CLI::App& app) {
   auto o = std::make_shared<BuffersOptions>();

@@ -314,12 +314,17 @@ void figure9(Figure9Options& o) {
   s.headlines_settled = [&points, target_ratio, target_exponent](const runner::RunRecord& record) {
     return figures(round_points(points, record), Metric::wall, target_ratio, target_exponent, true).unsettled.empty();
   };
-  s.derive = [target_ratio, target_exponent](nlohmann::json& doc) { derive(doc, target_ratio, target_exponent); };
+  s.derive = derive_figure9;  // reads the targets from config (as merge does)
   s.summary = print_summary;
   run_sweep(points, s);
 }
 
 }  // namespace
+
+void derive_figure9(nlohmann::json& doc) {
+  const auto& config = doc.at("config");
+  derive(doc, config.at("target_ratio_pct").get<double>() / 100, config.at("target_exponent").get<double>());
+}
 
 void add_figure9_command(CLI::App& app) {
   auto o = std::make_shared<Figure9Options>();

@@ -71,19 +71,25 @@ void list_runs(const HistoryOptions& o) {
   auto store = Store::open(o.store, false);
   const auto runs = store->runs();
   fmt::print("{} runs in {} ({})\n", runs.size(), o.store, store->kind());
-  fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {}\n", "id", "date (UTC)", "commit", "sweep", "shard",
-             "status", "points", "machine");
+  fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {:>7}  {}\n", "id", "date (UTC)", "commit", "sweep", "shard",
+             "status", "points", "figures", "machine");
   for (const auto& r : runs)
-    fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {}\n", r.id, r.date_utc, r.commit.substr(0, 14), r.sweep,
-               r.shard.empty() ? "all" : r.shard, r.status, store->points(r.id).size(), r.machine);
+    fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {:>7}  {}\n", r.id, r.date_utc, r.commit.substr(0, 14),
+               r.sweep, r.shard.empty() ? "all" : r.shard, r.status, store->points(r.id).size(), store->headlines(r.id).size(),
+               r.machine);
 }
 
 void print_series(const HistoryOptions& o) {
   auto store = Store::open(o.store, false);
   const auto all = history::series(*store, o.point, history::parse_metric(o.metric), change_point_options(o));
   for (const auto& s : all) {
-    fmt::print("{} ({}), {}, on {}:\n", s.point_id, s.sweep, history::metric_name(history::parse_metric(o.metric)), s.machine);
-    fmt::print("  {:<14}  {:<20}  {:>12}  {:>23}  {:>4}\n", "commit", "date (UTC)", "median ms", "IQR ms", "runs");
+    const bool interval = !s.values.empty() && std::all_of(s.values.begin(), s.values.end(), [](auto& v) { return v.has_interval; });
+    if (s.headline)
+      fmt::print("{} ({}), headline figure ({}), on {}:\n", s.point_id, s.sweep, s.unit, s.machine);
+    else
+      fmt::print("{} ({}), {}, on {}:\n", s.point_id, s.sweep, history::metric_name(history::parse_metric(o.metric)), s.machine);
+    fmt::print("  {:<14}  {:<20}  {:>12}  {:>23}  {:>4}\n", "commit", "date (UTC)", s.headline ? s.unit : "median ms",
+               !s.headline ? "IQR ms" : interval ? "95% interval" : "spread over runs", "runs");
     for (std::size_t i = 0; i < s.values.size(); ++i) {
       const auto& v = s.values[i];
       for (const auto& st : s.steps)
@@ -110,7 +116,8 @@ void print_changes(const HistoryOptions& o) {
       steps.push_back({{"commit", st.commit}, {"before_commit", st.before_commit}, {"ratio", st.ratio}, {"p_value", st.p_value}});
     }
     with_steps += !s.steps.empty();
-    out.push_back({{"point", s.point_id}, {"sweep", s.sweep}, {"machine", s.machine}, {"commits", s.values.size()}, {"steps", steps}});
+    out.push_back({{"point", s.point_id}, {"headline", s.headline}, {"unit", s.unit}, {"sweep", s.sweep}, {"machine", s.machine},
+                   {"commits", s.values.size()}, {"steps", steps}});
   }
   fmt::print("{} of {} series have change points (E-divisive means, p <= {}, {} permutations, {} commits a side at least)\n",
              with_steps, all.size(), o.max_p_value, o.permutations, o.min_segment);
@@ -124,12 +131,12 @@ void print_changes(const HistoryOptions& o) {
 
 // Every file is read and checked before anything is appended: a bad file leaves the store as it was.
 void import_files(const HistoryOptions& o) {
-  std::vector<std::pair<history::RunRow, std::vector<history::PointRow>>> runs;
+  std::vector<std::pair<history::RunRow, nlohmann::json>> runs;
   for (const auto& path : o.files) {
-    const nlohmann::json doc = compare::load_results(path);
+    nlohmann::json doc = compare::load_results(path);
     try {
       auto run = history::run_of(doc, "imported", std::filesystem::path(path).filename().string());  // checks doc first
-      runs.emplace_back(std::move(run), history::points_of(doc));
+      runs.emplace_back(std::move(run), std::move(doc));
     } catch (const std::exception& e) {
       throw std::runtime_error(fmt::format("{}: {}; nothing was imported", path, e.what()));
     }
@@ -138,13 +145,14 @@ void import_files(const HistoryOptions& o) {
   std::set<std::tuple<std::string, std::string, std::string, std::string>> stored;
   for (const auto& r : store->runs()) stored.emplace(r.sweep, r.commit, r.date_utc, r.machine);
   for (std::size_t i = 0; i < runs.size(); ++i) {
-    const auto& [run, points] = runs[i];
+    const auto& [run, doc] = runs[i];
     if (!stored.emplace(run.sweep, run.commit, run.date_utc, run.machine).second) {
       fmt::print("{}: already in the store ({} of {} at {}), skipped\n", o.files[i], run.sweep, run.commit, run.date_utc);
       continue;
     }
-    const auto id = store->append(run, points);
-    fmt::print("{}: run {} ({}, {}, {} points)\n", o.files[i], id, run.sweep, run.commit, points.size());
+    const auto id = store->append_document(doc, "imported", run.source);
+    fmt::print("{}: run {} ({}, {}, {} points, {} headline figures)\n", o.files[i], id, run.sweep, run.commit,
+               history::points_of(doc).size(), history::headlines_of(doc).size());
   }
 }
 
@@ -153,10 +161,34 @@ void merge_files(const HistoryOptions& o) {
   check_writable_file(o.json_out, o.files);
   std::vector<nlohmann::json> docs;
   for (const auto& f : o.files) docs.push_back(compare::load_results(f));
-  const nlohmann::json merged = merge_shards(docs, o.files);
+  nlohmann::json merged = merge_shards(docs, o.files);
+  // The command's derived figures over all the merged points, by the command's own code (commands.hpp).
+  static const std::map<std::string, void (*)(nlohmann::json&)> derivers = {{"bokehbench.figure9", derive_figure9},
+                                                                             {"bokehbench.adaptive", derive_adaptive},
+                                                                             {"bokehbench.tradeoff", derive_tradeoff},
+                                                                             {"bokehbench.buffers", derive_buffers}};
+  const std::string schema = merged.value("schema", "");
+  const auto deriver = derivers.find(schema);
+  const std::string shard1 = merged["shards"][0]["shard"].get<std::string>();
+  if (deriver != derivers.end()) {
+    deriver->second(merged);
+    merged["derived_recomputed"] = true;
+    merged["merged_note"] = fmt::format("{} shards joined by `bokehbench merge`; context and measurement are shard {}'s (each "
+                                        "shard's are under shards); the command's derived figures were recomputed over "
+                                        "all merged points by the command's own code{}",
+                                        docs.size(), shard1,
+                                        schema == "bokehbench.figure9" ? " (probe drift and stop reason: shard " + shard1 + "'s)" : "");
+  } else {
+    merged["derived_recomputed"] = false;
+    merged["merged_note"] = fmt::format("{} shards joined by `bokehbench merge`; context and measurement are shard {}'s (each "
+                                        "shard's are under shards); derived figures were NOT recomputed ({} has no "
+                                        "derivation merge knows): only the points are merged",
+                                        docs.size(), shard1, schema);
+  }
   write_text_atomically(o.json_out, merged.dump(2) + "\n");
-  fmt::print("merged {} shards ({} points, {} skipped, {}) into {}\n", o.files.size(), merged["points"].size(),
-             merged["skipped"].size(), merged["status"].get<std::string>(), o.json_out);
+  fmt::print("merged {} shards ({} points, {} skipped, {}) into {}; derived figures {}\n", o.files.size(), merged["points"].size(),
+             merged["skipped"].size(), merged["status"].get<std::string>(), o.json_out,
+             deriver != derivers.end() ? "recomputed over all points" : "NOT recomputed (" + schema + " has none merge knows)");
   if (merged["context"].contains("shard_machines"))
     fmt::print("note: the shards were measured on {} machines: {}\n", merged["context"]["shard_machines"].size(),
                merged["context"]["shard_machines"].dump());
@@ -185,19 +217,41 @@ std::vector<std::pair<int, double>> parse_steps(const std::vector<std::string>& 
 // Synthetic histories built from real runs: commit c of a point's history is a bootstrap resample of
 // the samples of one real run of that point (drawn at random), so it carries that machine's real noise
 // within and between runs; the steps multiply the samples from their commit on.
+// Given paired comparisons (ab's --json: design paired, each point's pairs), commit c's value is
+// instead the paired new/old ratio (ab's Hodges-Lehmann estimate) of a bootstrap resample of one real
+// comparison's pairs, times the steps: the headline series new_over_old/POINT as CI's check stores it.
 void evaluate(const HistoryOptions& o) {
   if (o.files.empty()) throw std::invalid_argument("history evaluate: give real runs' results files (--from)");
   const auto steps = parse_steps(o.steps, o.commits);
   const history::Metric metric = history::parse_metric(o.metric);
+  using Pairs = std::vector<std::pair<double, double>>;  // (old, new) per pair
   std::map<std::string, std::vector<std::vector<double>>> runs_of_point;  // point -> each run's samples
+  std::map<std::string, std::vector<Pairs>> pairs_of_point;               // point -> each comparison's pairs
   for (const auto& path : o.files) {
     const nlohmann::json doc = compare::load_results(path);
+    if (doc.value("design", "") == "paired") {
+      for (const auto& p : doc.value("points", nlohmann::json::array())) {
+        if (!p.contains("paired_ms")) continue;
+        const auto b = p["paired_ms"]["baseline"].get<std::vector<double>>(), c = p["paired_ms"]["current"].get<std::vector<double>>();
+        Pairs pairs;
+        for (std::size_t i = 0; i < std::min(b.size(), c.size()); ++i)
+          if (b[i] > 0 && c[i] > 0) pairs.emplace_back(b[i], c[i]);
+        if (pairs.size() >= 6) pairs_of_point[p.value("id", "?")].push_back(std::move(pairs));
+      }
+      continue;
+    }
     for (const auto& p : history::points_of(doc)) {
       const auto& samples = metric == history::Metric::wall ? p.samples_ms : p.samples_cpu_ms;
       if (samples.size() >= 3) runs_of_point[p.point_id].push_back(samples);
     }
   }
-  if (runs_of_point.empty()) throw std::runtime_error("history evaluate: no point with 3 samples or more in the files given");
+  if (!runs_of_point.empty() && !pairs_of_point.empty())
+    throw std::invalid_argument("history evaluate: give sweeps' results files or paired comparisons (ab --json), not both");
+  const bool paired = !pairs_of_point.empty();
+  if (paired)  // the same loop below draws from either
+    for (const auto& [point, comparisons] : pairs_of_point) runs_of_point[point].resize(comparisons.size());
+  if (runs_of_point.empty())
+    throw std::runtime_error("history evaluate: no point with 3 samples (or 6 pairs) or more in the files given");
   std::mt19937_64 rng(o.seed);
   const auto options = change_point_options(o);
   struct Tally {
@@ -212,13 +266,26 @@ void evaluate(const HistoryOptions& o) {
         Tally& t = kind == 0 ? with_steps : aa;
         std::vector<history::SeriesValue> values;
         for (int c = 0; c < o.commits; ++c) {
-          const auto& run = runs[std::uniform_int_distribution<std::size_t>(0, runs.size() - 1)(rng)];
+          const std::size_t drawn = std::uniform_int_distribution<std::size_t>(0, runs.size() - 1)(rng);
+          const auto& run = runs[drawn];
           double factor = 1;
           if (kind == 0)
             for (const auto& [at, pct] : steps)
               if (c >= at) factor *= 1 + pct / 100;
           history::SeriesValue v;
           v.commit = fmt::format("c{:03d}", c);
+          if (paired) {
+            const Pairs& pairs = pairs_of_point.at(point)[drawn];
+            std::vector<double> old_ms, new_ms;
+            for (std::size_t i = 0; i < pairs.size(); ++i) {
+              const auto& pair = pairs[std::uniform_int_distribution<std::size_t>(0, pairs.size() - 1)(rng)];
+              old_ms.push_back(pair.first), new_ms.push_back(pair.second);
+            }
+            v.samples_ms = {compare::judge_paired(old_ms, new_ms, compare::Rule{}).ratio_of_medians * factor};
+            v.samples_cpu_ms = v.samples_ms;
+            values.push_back(std::move(v));
+            continue;
+          }
           for (std::size_t i = 0; i < run.size(); ++i)
             v.samples_ms.push_back(run[std::uniform_int_distribution<std::size_t>(0, run.size() - 1)(rng)] * factor);
           v.samples_cpu_ms = v.samples_ms;
@@ -245,10 +312,11 @@ void evaluate(const HistoryOptions& o) {
         for (bool m : matched) t.false_points += !m;
       }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  fmt::print("synthetic histories from {} real run file(s), {} points, {} commits each, {} histories a point "
-             "(E-divisive means, p <= {}, {} permutations, {} commits a side; {} metric); {:.1f} s\n",
-             o.files.size(), runs_of_point.size(), o.commits, o.histories, o.max_p_value, o.permutations, o.min_segment, o.metric,
-             seconds);
+  fmt::print("synthetic histories from {} real {} file(s), {} points, {} commits each, {} histories a point "
+             "(E-divisive means, p <= {}, {} permutations, {} commits a side; {}); {:.1f} s\n",
+             o.files.size(), paired ? "paired comparison (ab)" : "run", runs_of_point.size(), o.commits, o.histories,
+             o.max_p_value, o.permutations, o.min_segment,
+             paired ? "each commit's paired new/old ratio" : o.metric + " metric", seconds);
   nlohmann::json step_json = nlohmann::json::array();
   for (std::size_t s = 0; s < steps.size(); ++s) {
     fmt::print("  step {:+.1f}% at commit {}: found at that commit in {} of {} series ({:.1f}%), within one commit in {} ({:.1f}%)\n",
@@ -263,7 +331,8 @@ void evaluate(const HistoryOptions& o) {
              false_with, false_aa, aa.false_points, aa.series);
   if (!o.json_out.empty()) {
     write_results(o.json_out, "bokehbench.history_evaluate", run_context(nullptr),
-                  {{"files", o.files}, {"points", runs_of_point.size()}, {"commits", o.commits}, {"histories", o.histories},
+                  {{"files", o.files}, {"series_of", paired ? "paired new/old ratio (ab)" : "point medians"},
+                   {"points", runs_of_point.size()}, {"commits", o.commits}, {"histories", o.histories},
                    {"metric", o.metric}, {"max_p_value", o.max_p_value}, {"permutations", o.permutations},
                    {"min_segment", o.min_segment}, {"seed", o.seed}, {"steps", step_json},
                    {"false_per_100_commits_with_steps", false_with}, {"false_per_100_commits_aa", false_aa},
@@ -279,6 +348,7 @@ void cost(const HistoryOptions& o) {
   const nlohmann::json doc = compare::load_results(o.files[0]);
   history::RunRow run = history::run_of(doc, "history cost", o.files[0]);
   const auto points = history::points_of(doc);
+  const auto headlines = history::headlines_of(doc);
   const bool sqlite = o.store.find("://") == std::string::npos;
   const std::string path = o.store.rfind("sqlite:", 0) == 0 ? o.store.substr(7) : o.store;
   if (sqlite && std::filesystem::exists(path))
@@ -290,7 +360,7 @@ void cost(const HistoryOptions& o) {
     run.commit = fmt::format("c{:04d}", i);
     run.date_utc = fmt::format("2000-01-{:02d}T{:02d}:{:02d}:00Z", 1 + i / 1440, i / 60 % 24, i % 60);
     const auto t0 = std::chrono::steady_clock::now();
-    store->append(run, points);
+    store->append(run, points, headlines);
     append_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(append_ms.begin(), append_ms.end());
@@ -329,14 +399,16 @@ void add_history_command(CLI::App& app) {
 
   auto* series = cmd->add_subcommand("series", "One point's series over commits, one per machine, with its change points");
   add_store_option(series, *o);
-  series->add_option("--point", o->point, "The point's id (as in the results files)")->required();
+  series->add_option("--point", o->point, "The point's id (as in the results files), or a headline figure's name "
+                                          "(naive_over_flag/gpu/N:9, new_over_old/POINT, ...; history changes lists them)")
+      ->required();
   add_change_point_options(series, *o);
   series->callback([o] { print_series(*o); });
 
   auto* changes = cmd->add_subcommand("changes", "The change points of every series (or one point's), the commit where "
                                                  "each step happened, its size and p-value");
   add_store_option(changes, *o);
-  changes->add_option("--point", o->point, "Only this point");
+  changes->add_option("--point", o->point, "Only this point (or headline figure)");
   changes->add_option("--sweep", o->sweep, "Only this sweep's points (figure9, tradeoff, ...)");
   changes->add_option("--json", o->json_out, "Also write them as JSON here");
   add_change_point_options(changes, *o);
@@ -352,7 +424,8 @@ void add_history_command(CLI::App& app) {
       "evaluate", "Change-point detection on synthetic histories resampled from real runs, with steps injected at "
                   "known commits and A/A histories: how often each step is found at its commit, false change points "
                   "per 100 commits");
-  evaluate_cmd->add_option("--from", o->files, "Real runs' results files (the same sweep)")->required()->check(CLI::ExistingFile);
+  evaluate_cmd->add_option("--from", o->files, "Real runs' results files (the same sweep), or paired comparisons (ab "
+                                               "--json): then each commit is a paired new/old ratio")->required()->check(CLI::ExistingFile);
   evaluate_cmd->add_option("--commits", o->commits, "Commits a history")->check(CLI::Range(8, 10000))->capture_default_str();
   evaluate_cmd->add_option("--histories", o->histories, "Histories a point, of each kind")->check(CLI::Range(1, 100000))->capture_default_str();
   evaluate_cmd->add_option("--steps", o->steps, "Steps injected, COMMIT:PCT each (0-based commit: the first after the step)")

@@ -15,6 +15,7 @@
 // Methods come from the registry (registered_methods()), so a new method is covered unchanged.
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -30,6 +31,7 @@
 #include "parallel.hpp"
 #include "report.hpp"
 #include "run.hpp"
+#include "store.hpp"
 #include "sweep.hpp"
 
 namespace bokeh {
@@ -44,6 +46,8 @@ struct StabilityOptions {
   AxisFlags axes;  // methods (default: every registered method) and backends
   bool quick = false;
   int cpu_threads = 0;
+  std::string store;      // --store URL; empty: history.sqlite beside --out
+  bool no_store = false;  // --no-store
 };
 
 // One case: what the scene is and what the truth says.
@@ -508,7 +512,17 @@ void stability(StabilityOptions& o) {
                         "or saturation on the intensity axes at or below it"}}},
       {"configurations", configurations},
       {"elapsed_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
-  write_results(o.out_path, "bokehbench.stability", run_context(ctx ? &ctx->info() : nullptr), body);
+  const nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
+  write_results(o.out_path, "bokehbench.stability", context, body);
+  // Into the results store like every sweep: its safe ranges as headline figures (store.hpp).
+  if (!o.no_store) {
+    nlohmann::json doc = body;
+    doc["schema"] = "bokehbench.stability";
+    doc["context"] = context;
+    const std::string out_dir = std::filesystem::path(o.out_path).parent_path().string();
+    history::append_run(o.store.empty() ? history::default_store_url(out_dir.empty() ? "." : out_dir) : o.store, doc,
+                        command_line());
+  }
   fmt::print("columns: radius px | intensity (r = 4 px) | intensity in focus | depth m | width px: where the numerics "
              "hold, around the nominal case (\"fails\": already there); disc: radii whose disc has the exact size\n"
              "wrote {} ({:.0f} s)\n",
@@ -528,6 +542,10 @@ void add_stability_command(CLI::App& app) {
   cmd->add_option("--cpu-threads", o->cpu_threads, "Threads for the CPU references (default: every core)")
       ->check(CLI::Range(1, 1024));
   cmd->add_flag("--quick", o->quick, "Radii up to 16 px and widths 64 and 3840 only (CI)");
+  cmd->add_option("--store", o->store,
+                  "Results store the run is appended to: a file (SQLite) or postgresql://user@host/db (default: "
+                  "history.sqlite beside --out)");
+  cmd->add_flag("--no-store", o->no_store, "Append the run to no results store");
   cmd->callback([o] { stability(*o); });
 }
 

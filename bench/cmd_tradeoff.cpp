@@ -82,7 +82,7 @@ void tradeoff(TradeoffOptions& o) {
               {"methods", axes.methods},
               {"apertures", o.axes.apertures},
               {"pareto", "minimise frame_ms median, maximise PSNR vs the energy_sum exact reference"}};
-  s.derive = [](nlohmann::json& doc) { doc["pareto_front"] = pareto_ids(doc["points"]); };
+  s.derive = derive_tradeoff;
   s.summary = [](const nlohmann::json& doc) {
     fmt::print("\nPareto front (fastest first: nothing is both faster and more accurate; each aperture its own):\n");
     std::string shown;
@@ -99,6 +99,8 @@ void tradeoff(TradeoffOptions& o) {
 }
 
 }  // namespace
+
+void derive_tradeoff(nlohmann::json& doc) { doc["pareto_front"] = pareto_ids(doc["points"]); }
 
 void add_tradeoff_command(CLI::App& app) {
   auto o = std::make_shared<TradeoffOptions>();

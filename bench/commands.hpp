@@ -121,6 +121,13 @@ void report_verdicts(const compare::Report& report, const std::string& json_out)
 // True when the user gave `option` on the command line (so --quick must not override it).
 inline bool given(const CLI::Option* option) { return option->count() > 0; }
 
+// A sweep's derived figures (ratios, fits, speed-ups, fronts) from its document's points and config,
+// the code its command runs: `merge` recomputes them over the merged shards' points with these.
+void derive_figure9(nlohmann::json& doc);
+void derive_adaptive(nlohmann::json& doc);
+void derive_tradeoff(nlohmann::json& doc);
+void derive_buffers(nlohmann::json& doc);
+
 void add_devices_command(CLI::App& app);
 void add_methods_command(CLI::App& app);
 void add_render_command(CLI::App& app);

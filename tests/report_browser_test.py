@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """The history end to end: a real run imported as 12 commits with a known step (every sample x1.25 from
-commit c07 on), its change points, and the HTML report opened in a real headless browser (Debian's
+commit c07 on, and every naive/FLAG ratio with its interval x1.25: headline figures are series of their
+own; the growth exponents stay as they were), its change points, and the HTML report opened in a real headless browser (Debian's
 chromium): no console messages, every trend drawn, every plot decoded; a screenshot is kept.
 
 usage: report_browser_test.py BOKEHBENCH WORKDIR REAL_RUN_JSON PLOTS_DIR
@@ -46,6 +47,9 @@ def main(bokehbench, workdir, real_run, plots_dir):
         for p in doc["points"]:
             p["samples_ms"] = [v * factor for v in p["samples_ms"]]
             p["samples_cpu_ms"] = [v * factor for v in p["samples_cpu_ms"]]
+        for r in doc["naive_over_flag"]:
+            for key in ("naive_over_flag", "low", "high"):
+                r[key] *= factor
         path = work / f"run{c:02d}.json"
         path.write_text(json.dumps(doc))
         files.append(str(path))
@@ -57,14 +61,25 @@ def main(bokehbench, workdir, real_run, plots_dir):
     # Every series steps at c07 by exactly the factor (the same samples, scaled).
     changes = work / "changes.json"
     run([bokehbench, "history", "changes", "--store", str(store), "--json", str(changes)])
-    series = json.loads(changes.read_text())["series"]
+    all_series = json.loads(changes.read_text())["series"]
+    series = [s for s in all_series if not s["headline"]]
+    ratios = [s for s in all_series if s["headline"] and s["point"].startswith("naive_over_flag/")]
+    exponents = [s for s in all_series if s["headline"] and s["point"].startswith("exponent/")]
     assert len(series) == len(base["points"]), (len(series), len(base["points"]))
-    for s in series:
+    assert len(ratios) == len(base["naive_over_flag"]) and ratios, (len(ratios), len(base["naive_over_flag"]))
+    assert len(exponents) == sum(len(c["fits"]) for c in base["series"]) and exponents, len(exponents)
+    assert len(all_series) == len(series) + len(ratios) + len(exponents), [s["point"] for s in all_series]
+    for s in series + ratios:
         assert len(s["steps"]) == 1, s
         step = s["steps"][0]
         assert step["commit"] == f"c{STEP_AT:02d}" and step["before_commit"] == f"c{STEP_AT - 1:02d}", step
         assert abs(step["ratio"] - FACTOR) < 1e-9, step
-    print(f"{len(series)} series, each with its one step at c{STEP_AT:02d} (x{FACTOR})")
+    for s in exponents:  # unchanged over the 12 commits: no change point
+        assert s["steps"] == [] and s["commits"] == 12 and s["unit"] == "exponent", s
+    print(f"{len(series)} point series and {len(ratios)} naive/FLAG ratio series, each with its one step at "
+          f"c{STEP_AT:02d} (x{FACTOR}); {len(exponents)} exponent series without one")
+    one = run([bokehbench, "history", "series", "--store", str(store), "--point", ratios[0]["point"]]).stdout
+    assert "headline figure (ratio)" in one and "95% interval" in one and "change point: +25.0%" in one, one
 
     page = work / "report.html"
     run([bokehbench, "report", "--store", str(store), "--out", str(page), "--plots-dir", plots_dir])
@@ -74,12 +89,12 @@ def main(bokehbench, workdir, real_run, plots_dir):
     done, console = chromium(["--dump-dom"], page)
     assert done.returncode == 0, done.stderr[-2000:]
     assert not console, "console messages:\n" + "\n".join(console)
-    rendered = re.search(r'data-rendered="trends:(\d+) images:(\d+)/(\d+)"', done.stdout)
+    rendered = re.search(r'data-rendered="trends:(\d+) headlines:(\d+) images:(\d+)/(\d+)"', done.stdout)
     assert rendered, "the page's load check did not run"
-    trends, loaded, images = map(int, rendered.groups())
-    assert trends == len(series), (trends, len(series))
+    trends, headlines, loaded, images = map(int, rendered.groups())
+    assert trends == len(all_series) and headlines == len(ratios) + len(exponents), (trends, headlines, len(all_series))
     assert images >= 1 and loaded == images, f"{loaded} of {images} plots decoded"
-    print(f"chromium: {trends} trends drawn, {loaded}/{images} plots decoded, no console messages")
+    print(f"chromium: {trends} trends drawn ({headlines} of headline figures), {loaded}/{images} plots decoded, no console messages")
     shot = work / "report.png"
     done, console = chromium([f"--screenshot={shot}", "--window-size=1200,2400", "--hide-scrollbars"], page)
     assert shot.exists() and shot.stat().st_size > 10000, "no screenshot"

@@ -62,6 +62,10 @@ def main(bokehbench, workdir, schema_dir, validate):
     run(["/usr/bin/python3", validate, str(pathlib.Path(schema_dir) / "sweep.schema.json"), str(merged)])
     doc = json.loads(merged.read_text())
     assert {p["id"] for p in doc["points"]} == {p["id"] for p in whole["points"]}
+    # figure9's derived figures over all merged points (merge_derived_test.py checks their values).
+    assert doc["derived_recomputed"] is True, doc.get("merged_note")
+    assert {(r["backend"], r["N"]) for r in doc["naive_over_flag"]} == {(r["backend"], r["N"]) for r in whole["naive_over_flag"]}
+    assert {(c["method"], c["backend"]) for c in doc["series"]} == {(c["method"], c["backend"]) for c in whole["series"]}
     # compare reads it: a verdict (0 or 2; never 1, an error, or 3, not comparable).
     done = run([bokehbench, "compare", unsharded, str(merged)], ok=(0, 2, 4))
     print(f"merged: valid, compare exit {done.returncode}")

@@ -47,21 +47,42 @@ std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metr
     out[i].q3_ms = quantile_of(pooled[i], 0.75);
     out[i].samples = static_cast<int>(pooled[i].size());
   }
+  // Headline figures: the interval each run gave, where every run of the commit gave one.
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> ends;
+  std::map<std::string, bool> all_have;
+  for (const auto& r : runs) {
+    auto [it, added] = all_have.emplace(r.commit, true);
+    it->second = it->second && r.has_interval;
+    ends[r.commit].first.push_back(r.q1_ms), ends[r.commit].second.push_back(r.q3_ms);
+  }
+  for (auto& c : out)
+    if (all_have[c.commit]) {
+      c.has_interval = true;
+      c.q1_ms = quantile_of(ends[c.commit].first, 0.5);
+      c.q3_ms = quantile_of(ends[c.commit].second, 0.5);
+    }
   return out;
 }
 
 std::vector<Series> series(Store& store, const std::string& point_id, Metric metric, const ChangePointOptions& options) {
-  std::vector<std::pair<std::string, std::string>> ids;
+  struct Wanted {
+    std::string id, sweep, unit;
+    bool headline;
+  };
+  std::vector<Wanted> ids;
   for (const auto& [id, sweep] : store.point_ids())
-    if (point_id.empty() || id == point_id) ids.emplace_back(id, sweep);
-  if (!point_id.empty() && ids.empty()) throw std::runtime_error("no point '" + point_id + "' in the store " + store.url());
+    if (point_id.empty() || id == point_id) ids.push_back({id, sweep, "ms", false});
+  for (const auto& [key, unit] : store.headline_names())
+    if (point_id.empty() || key.first == point_id) ids.push_back({key.first, key.second, unit, true});
+  if (!point_id.empty() && ids.empty())
+    throw std::runtime_error("no point or headline figure '" + point_id + "' in the store " + store.url());
   std::vector<Series> out;
-  for (const auto& [id, sweep] : ids) {
+  for (const auto& w : ids) {
     std::map<std::string, std::vector<SeriesValue>> by_machine;
-    for (auto& v : store.series(id))  // one sweep's runs: the same point in another sweep is another design
-      if (v.sweep == sweep) by_machine[v.machine].push_back(std::move(v));
+    for (auto& v : w.headline ? store.headline_series(w.id) : store.series(w.id))
+      if (v.sweep == w.sweep) by_machine[v.machine].push_back(std::move(v));  // another sweep's is another design
     for (const auto& [machine, runs] : by_machine) {
-      Series s{id, sweep, machine, over_commits(runs, metric), {}};
+      Series s{w.id, w.sweep, machine, w.unit, w.headline, over_commits(runs, w.headline ? Metric::wall : metric), {}};
       if (s.values.empty()) continue;
       std::vector<double> medians;
       for (const auto& v : s.values) medians.push_back(v.median_ms);

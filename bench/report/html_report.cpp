@@ -61,9 +61,9 @@ std::string series_svg(const Series& s) {
   const std::size_t n = s.values.size();
   auto x = [&](std::size_t i) { return left + (n > 1 ? (width - left - right) * i / (n - 1.0) : (width - left - right) / 2); };
   auto y = [&](double v) { return top + (height - top - bottom) * (hi - v) / (hi - lo); };
-  std::string svg = fmt::format("<svg class=\"trend\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
+  std::string svg = fmt::format("<svg class=\"trend{}\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
                                 "viewBox=\"0 0 {} {}\" role=\"img\" aria-label=\"{}\">\n",
-                                width, height, width, height, escape(s.point_id));
+                                s.headline ? " headline" : "", width, height, width, height, escape(s.point_id));
   svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#fafafa\" stroke=\"#ccc\"/>\n", left, top,
                      width - left - right, height - top - bottom);
   for (int t = 0; t <= 4; ++t) {  // value ticks
@@ -79,10 +79,11 @@ std::string series_svg(const Series& s) {
   svg += "<polygon fill=\"#9ecae1\" fill-opacity=\"0.5\" points=\"" + band_top + band_bottom + "\"/>\n";
   svg += "<polyline fill=\"none\" stroke=\"#08519c\" stroke-width=\"1.5\" points=\"" + line + "\"/>\n";
   for (std::size_t i = 0; i < n; ++i)
-    svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"#08519c\"><title>{}: median {:.4g} ms [{:.4g}-{:.4g}], "
+    svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.5\" fill=\"#08519c\"><title>{}: {} {:.4g} {} [{:.4g}-{:.4g}]{}, "
                        "{} run(s)</title></circle>\n",
-                       x(i), y(s.values[i].median_ms), escape(short_commit(s.values[i].commit)), s.values[i].median_ms,
-                       s.values[i].q1_ms, s.values[i].q3_ms, s.values[i].runs);
+                       x(i), y(s.values[i].median_ms), escape(short_commit(s.values[i].commit)), s.headline ? "value" : "median",
+                       s.values[i].median_ms, escape(s.unit), s.values[i].q1_ms, s.values[i].q3_ms,
+                       !s.headline ? " IQR" : s.values[i].has_interval ? " 95% interval" : " over runs", s.values[i].runs);
   for (const auto& step : s.steps) {  // the step lies between the commit before and the one after
     const double sx = (x(step.index - 1) + x(step.index)) / 2;
     svg += fmt::format("<line class=\"change-point\" x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#d62728\" "
@@ -114,7 +115,7 @@ std::string html_report(const HtmlReportInput& in) {
 
   // The latest verdicts: for each series, its newest commit against the one before and its last step.
   html += "<h2>Latest verdicts</h2>\n<table id=\"verdicts\">\n<tr><th>point</th><th>machine</th><th>latest commit</th>"
-          "<th>median ms</th><th>vs previous commit</th><th>last change point</th></tr>\n";
+          "<th>median ms, or figure</th><th>vs previous commit</th><th>last change point</th></tr>\n";
   std::vector<const Series*> order;
   for (const auto& s : in.series) order.push_back(&s);
   std::stable_sort(order.begin(), order.end(), [](const Series* a, const Series* b) {
@@ -134,9 +135,9 @@ std::string html_report(const HtmlReportInput& in) {
       step = fmt::format("<span class=\"{}\">{}</span> at {} (p {:.3f}, {} commit(s) ago)", st.ratio > 1 ? "slower" : "faster",
                          percent(st.ratio), escape(short_commit(st.commit)), st.p_value, s->values.size() - st.index);
     }
-    html += fmt::format("<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{:.4g} [{:.4g}-{:.4g}]</td><td>{}</td><td>{}</td></tr>\n",
-                        escape(s->point_id), escape(s->machine), escape(short_commit(last.commit)), last.median_ms, last.q1_ms,
-                        last.q3_ms, vs, step);
+    html += fmt::format("<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{:.4g}{} [{:.4g}-{:.4g}]</td><td>{}</td><td>{}</td></tr>\n",
+                        escape(s->point_id), escape(s->machine), escape(short_commit(last.commit)), last.median_ms,
+                        s->headline ? " " + escape(s->unit) : "", last.q1_ms, last.q3_ms, vs, step);
   }
   html += "</table>\n";
 
@@ -150,9 +151,26 @@ std::string html_report(const HtmlReportInput& in) {
                         escape(std::filesystem::path(path).filename().string()), base64(bytes.str()));
   }
 
+  // Headline figures first: a paired ratio's interval is a few percent wide, where a point's own
+  // median moves 12-17% between single runs, so steps of 5-10% show here first.
+  html += "<h2>Headline figures over commits</h2>\n<p>What each run derived (figure9's naive/FLAG ratios and growth "
+          "exponents, adaptive's speed-ups, ab's paired new/old ratio per point, stability's safe ranges): the value "
+          "per commit (line) and the run's 95% interval (band; where a run gave none, the spread over the commit's "
+          "runs), change points as below.</p>\n";
+  std::size_t headlines = 0;
+  for (const Series* s : order)
+    if (s->headline) {
+      ++headlines;
+      html += fmt::format("<section class=\"series headline\"><h3>{} <small>({}; {}; {})</small></h3>\n", escape(s->point_id),
+                          escape(s->unit), escape(s->sweep), escape(s->machine));
+      html += series_svg(*s) + "</section>\n";
+    }
+  if (headlines == 0) html += "<p>No headline figures in the store.</p>\n";
+
   html += "<h2>Trends over commits</h2>\n<p>Median per commit (line), interquartile range of its samples (band), change "
           "points (red, dashed: the step lies between two commits; the label names the first commit after it).</p>\n";
   for (const Series* s : order) {
+    if (s->headline) continue;
     html += fmt::format("<section class=\"series\"><h3>{} <small>({}; {})</small></h3>\n", escape(s->point_id), escape(s->sweep),
                         escape(s->machine));
     html += series_svg(*s) + "</section>\n";
@@ -170,6 +188,7 @@ std::string html_report(const HtmlReportInput& in) {
           "  var imgs = Array.from(document.images), bad = imgs.filter(function (i) { return !i.complete || i.naturalWidth === 0; });\n"
           "  bad.forEach(function (i) { console.error('plot did not load: ' + i.alt); });\n"
           "  document.body.setAttribute('data-rendered', 'trends:' + document.querySelectorAll('svg.trend').length + "
+          "' headlines:' + document.querySelectorAll('svg.trend.headline').length + "
           "' images:' + (imgs.length - bad.length) + '/' + imgs.length);\n});\n</script>\n";
   return html + "</body>\n</html>\n";
 }

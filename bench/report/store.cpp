@@ -217,8 +217,16 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
     throw std::runtime_error(fmt::format("results store '{}' has schema version {}, newer than this bokehbench reads ({}): "
                                          "use a newer bokehbench (nothing was changed in the store)",
                                          url_, *version, kStoreSchemaVersion));
-  if (version) return;
-  if (!create) throw std::runtime_error(fmt::format("'{}' is not a bokehbench results store (no meta table)", url_));
+  if (!version && !create) throw std::runtime_error(fmt::format("'{}' is not a bokehbench results store (no meta table)", url_));
+  auto has_headlines = [&] {
+    return !(c.kind() == "sqlite"
+                 ? c.query("SELECT name FROM sqlite_master WHERE type = 'table' AND name = 'headlines'")
+                 : c.query("SELECT table_name FROM information_schema.tables WHERE table_name = 'headlines'"))
+                .empty();
+  };
+  has_headlines_ = version && has_headlines();
+  // Reading a store written before headline figures were stored: it has none (nothing is changed in it).
+  if (has_headlines_ || (version && !create)) return;
   c.begin_write();
   try {
     // PostgreSQL: shards starting at once on an empty database create the tables once.
@@ -238,14 +246,22 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
               "frame_ms TEXT NOT NULL, cpu_ms TEXT NOT NULL, PRIMARY KEY (run_id, point_id))");
       c.query("CREATE INDEX points_by_id ON points (point_id)");
     }
+    // Added to schema version 1 (a table more: older readers ignore it, so no version bump); a store
+    // written before gains it on its first append. low/high hold the value when has_interval is 0.
+    c.query("CREATE TABLE IF NOT EXISTS headlines (run_id BIGINT NOT NULL REFERENCES runs(id), name TEXT NOT NULL, "
+            "unit TEXT NOT NULL, value DOUBLE PRECISION NOT NULL, low DOUBLE PRECISION NOT NULL, "
+            "high DOUBLE PRECISION NOT NULL, has_interval INTEGER NOT NULL, PRIMARY KEY (run_id, name))");
     c.commit();
+    has_headlines_ = true;
   } catch (...) {
     c.rollback();
     throw;
   }
 }
 
-std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& points) {
+std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& points, const std::vector<HeadlineRow>& headlines) {
+  if (!headlines.empty() && !has_headlines_)
+    throw std::logic_error("results store opened for reading only: it cannot take headline figures");
   Connection& c = *connection_;
   c.begin_write();
   try {
@@ -262,12 +278,62 @@ std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& point
       c.query("INSERT INTO samples (run_id, point_id, frame_ms, cpu_ms) VALUES ($1, $2, $3, $4)",
               {id, p.point_id, join(p.samples_ms), join(p.samples_cpu_ms)});
     }
+    for (const auto& h : headlines)
+      c.query("INSERT INTO headlines (run_id, name, unit, value, low, high, has_interval) VALUES ($1, $2, $3, $4, $5, $6, $7)",
+              {id, h.name, h.unit, num(h.value), num(h.low.value_or(h.value)), num(h.high.value_or(h.value)),
+               h.low && h.high ? "1" : "0"});
     c.commit();
     return std::stoll(id);
   } catch (...) {
     c.rollback();
     throw;
   }
+}
+
+std::int64_t Store::append_document(const nlohmann::json& doc, const std::string& command, const std::string& source) {
+  return append(run_of(doc, command, source), points_of(doc), headlines_of(doc));
+}
+
+std::vector<HeadlineRow> Store::headlines(std::int64_t run_id) {
+  std::vector<HeadlineRow> out;
+  if (!has_headlines_) return out;
+  for (const auto& r : connection_->query("SELECT name, unit, value, low, high, has_interval FROM headlines WHERE run_id = $1 "
+                                          "ORDER BY name",
+                                          {std::to_string(run_id)})) {
+    HeadlineRow h{text(r[0]), text(r[1]), number(r[2]), std::nullopt, std::nullopt};
+    if (text(r[5]) == "1") h.low = number(r[3]), h.high = number(r[4]);
+    out.push_back(std::move(h));
+  }
+  return out;
+}
+
+std::vector<SeriesValue> Store::headline_series(const std::string& name) {
+  std::vector<SeriesValue> out;
+  if (!has_headlines_) return out;
+  for (const auto& r : connection_->query(
+           "SELECT r.id, r.commit_hash, r.date_utc, r.machine, r.shard, h.value, h.low, h.high, h.has_interval, r.sweep "
+           "FROM headlines h JOIN runs r ON r.id = h.run_id WHERE h.name = $1 AND r.status = 'complete' "
+           "ORDER BY r.date_utc, r.id",
+           {name})) {
+    SeriesValue v;
+    v.run_id = std::stoll(text(r[0]));
+    v.commit = text(r[1]), v.date_utc = text(r[2]), v.machine = text(r[3]), v.shard = text(r[4]);
+    v.median_ms = number(r[5]), v.q1_ms = number(r[6]), v.q3_ms = number(r[7]);
+    v.has_interval = text(r[8]) == "1";
+    v.samples_ms = v.samples_cpu_ms = {v.median_ms};
+    v.sweep = text(r[9]);
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
+std::vector<std::pair<std::pair<std::string, std::string>, std::string>> Store::headline_names() {
+  std::vector<std::pair<std::pair<std::string, std::string>, std::string>> out;
+  if (!has_headlines_) return out;
+  for (const auto& r : connection_->query("SELECT DISTINCT h.name, r.sweep, h.unit FROM headlines h JOIN runs r ON r.id = "
+                                          "h.run_id ORDER BY r.sweep, h.name"))
+    out.push_back({{text(r[0]), text(r[1])}, text(r[2])});
+  return out;
 }
 
 std::uint64_t Store::size_bytes() {
@@ -348,13 +414,16 @@ std::string machine_key(const nlohmann::json& context) {
 
 RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::string& source) {
   const std::string schema = doc.value("schema", "");
-  const bool sweep = schema.rfind("bokehbench.", 0) == 0 && doc.contains("points") && doc["points"].is_array() &&
+  // stability: a run of headline figures only (its safe ranges; nothing timed).
+  const bool figures_only = schema == "bokehbench.stability" && doc.contains("configurations") &&
+                            doc["configurations"].is_array() && doc.contains("context") && doc["context"].is_object();
+  const bool sweep = figures_only || schema.rfind("bokehbench.", 0) == 0 && doc.contains("points") && doc["points"].is_array() &&
                      doc.contains("context") && doc["context"].is_object() &&
                      std::all_of(doc["points"].begin(), doc["points"].end(),
                                  [](const nlohmann::json& p) { return p.is_object() && p.contains("id"); });
   if (!sweep)
     throw std::runtime_error(fmt::format("not the results of a sweep (schema '{}': a sweep file has context and points with "
-                                         "ids and samples; memory, kernels and stability are not sweeps)",
+                                         "ids and samples; memory and kernels are not sweeps)",
                                          schema));
   const nlohmann::json& context = doc["context"];
   RunRow run;
@@ -397,6 +466,97 @@ std::vector<PointRow> points_of(const nlohmann::json& doc) {
     if (!row.point_id.empty()) out.push_back(std::move(row));
   }
   return out;
+}
+
+namespace {
+bool is_number(const nlohmann::json& obj, const char* key) { return obj.is_object() && obj.contains(key) && obj[key].is_number(); }
+
+// A figure with the interval in obj[low_key] / obj[high_key] when the run gave one.
+HeadlineRow figure(std::string name, std::string unit, double value, const nlohmann::json& obj, const char* low_key = "low",
+                   const char* high_key = "high") {
+  HeadlineRow h{std::move(name), std::move(unit), value, std::nullopt, std::nullopt};
+  if (is_number(obj, low_key) && is_number(obj, high_key)) h.low = obj[low_key].get<double>(), h.high = obj[high_key].get<double>();
+  return h;
+}
+
+// stability: per configuration and axis, how many cases the safe range around the nominal case spans
+// (0: the nominal case fails), and how many cases fail in all. Deterministic: a step is a change in
+// the numerics.
+void stability_headlines(const nlohmann::json& doc, std::vector<HeadlineRow>& out) {
+  for (const auto& config : doc["configurations"]) {
+    if (!config.is_object() || !config.contains("cases") || !config["cases"].is_array()) continue;  // skipped
+    const std::string prefix = fmt::format("{}/{}/{}/", config.value("method", "?"), config.value("precision", "?"),
+                                           config.value("backend", "?"));
+    int failures = 0;
+    for (const auto& c : config["cases"]) failures += c.value("status", "") == "fail";
+    out.push_back({prefix + "failing_cases", "cases", static_cast<double>(failures), std::nullopt, std::nullopt});
+    if (!config.contains("safe_ranges") || !config["safe_ranges"].is_object()) continue;
+    for (const auto& [axis, range] : config["safe_ranges"].items()) {
+      const std::string case_axis = axis == "disc" ? "radius" : axis;  // disc: the radius axis judged by shape
+      std::vector<std::string> labels;
+      for (const auto& c : config["cases"])
+        if (c.value("axis", "") == case_axis) labels.push_back(c.value("label", ""));
+      double spanned = 0;
+      if (range["low"].is_string() && range["high"].is_string()) {
+        const auto lo = std::find(labels.begin(), labels.end(), range["low"].get<std::string>());
+        const auto hi = std::find(labels.begin(), labels.end(), range["high"].get<std::string>());
+        if (lo != labels.end() && hi != labels.end()) spanned = static_cast<double>(hi - lo + 1);
+      }
+      out.push_back({prefix + "safe_range_cases/" + axis, "cases", spanned, std::nullopt, std::nullopt});
+    }
+  }
+}
+}  // namespace
+
+std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
+  std::vector<HeadlineRow> out;
+  const std::string schema = doc.value("schema", "");
+  auto array = [&](const char* key) -> const nlohmann::json& {
+    static const nlohmann::json none = nlohmann::json::array();
+    return doc.contains(key) && doc[key].is_array() ? doc[key] : none;
+  };
+  if (schema == "bokehbench.stability") stability_headlines(doc, out);
+  // figure9: naive / FLAG per N and backend (paired within rounds), each curve's growth exponents.
+  for (const auto& r : array("naive_over_flag"))
+    if (is_number(r, "naive_over_flag"))
+      out.push_back(figure(fmt::format("naive_over_flag/{}/N:{}", r.value("backend", "?"), r.value("N", 0)), "ratio",
+                           r["naive_over_flag"].get<double>(), r));
+  for (const auto& c : array("series"))
+    if (c.is_object() && c.contains("fits") && c["fits"].is_object())
+      for (const auto& [fit, f] : c["fits"].items())
+        if (is_number(f, "exponent"))
+          out.push_back(figure(fmt::format("exponent/{}{}/{}/{}", c.value("method", "?"), c.value("variant", ""),
+                                           c.value("backend", "?"), fit),
+                               "exponent", f["exponent"].get<double>(), f));
+  // adaptive: off / on per configuration, paired within rounds when the run has it.
+  for (const auto& c : array("comparisons")) {
+    if (!c.is_object() || !c.contains("off_id")) continue;
+    const std::string name = "speedup/" + c["off_id"].get<std::string>();
+    if (c.contains("speedup_same_round") && is_number(c["speedup_same_round"], "median"))
+      out.push_back(figure(name, "ratio", c["speedup_same_round"]["median"].get<double>(), c["speedup_same_round"]));
+    else if (is_number(c, "speedup") && c["speedup"].get<double>() > 0)
+      out.push_back(figure(name, "ratio", c["speedup"].get<double>(), nlohmann::json()));
+  }
+  // buffers: streamed layers over the full-frame layers, per point (median of same-round ratios).
+  for (const auto& p : array("points"))
+    if (p.is_object() && p.contains("streamed_vs_full") && is_number(p["streamed_vs_full"], "frame_ms_ratio_median"))
+      out.push_back(figure("streamed_over_full/" + p.value("id", "?"), "ratio",
+                           p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(), nlohmann::json()));
+  // ab (the candidate's run): new / old per point, paired, with its Hodges-Lehmann interval.
+  for (const auto& r : array("paired_ratios"))
+    if (is_number(r, "ratio")) out.push_back(figure("new_over_old/" + r.value("id", "?"), "ratio", r["ratio"].get<double>(), r));
+  return out;
+}
+
+std::int64_t append_run(const std::string& url, const nlohmann::json& doc, const std::string& command) {
+  try {
+    auto store = Store::open(url, true);
+    const auto id = store->append_document(doc, command, "run");
+    fmt::print("appended run {} ({}) to the results store {}\n", id, doc.value("status", "complete"), store->url());
+    return id;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("the results file is written, but {}", e.what()));
+  }
 }
 
 std::string default_store_url(const std::string& out_dir) {

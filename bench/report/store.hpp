@@ -41,12 +41,26 @@ struct PointRow {
   std::vector<double> samples_ms, samples_cpu_ms;
 };
 
-// One value of a series: a run's figure for one point.
+// A run's headline figure: what a person reads of the run (figure9's naive/FLAG ratio at one N and its
+// growth exponents, adaptive's speed-ups, ab's paired new/old ratio per point, stability's safe ranges),
+// with its interval when the run gave one. Stored per run beside the points, so a figure is a series
+// over commits of its own: a paired ratio's interval is a few percent where single runs' per-point
+// medians move 12-17% run to run.
+struct HeadlineRow {
+  std::string name;  // e.g. "naive_over_flag/gpu/N:9" (unique within a run)
+  std::string unit;  // "ratio", "exponent", "cases"
+  double value = 0;
+  std::optional<double> low, high;  // the run's interval (95%), when it gave one
+};
+
+// One value of a series: a run's figure for one point (or one headline figure: median_ms is its value,
+// q1_ms and q3_ms its interval, or the value itself when the run gave none).
 struct SeriesValue {
   std::int64_t run_id = 0;
   std::string commit, date_utc, machine, shard, sweep;
   double median_ms = 0, q1_ms = 0, q3_ms = 0, cpu_median_ms = 0;
   std::vector<double> samples_ms, samples_cpu_ms;
+  bool has_interval = false;  // headline figures: q1_ms and q3_ms are the run's interval
 };
 
 // A store's connection: the SQL both back-ends run. Rows come back as text (NULL as nullopt).
@@ -71,13 +85,21 @@ class Store {
 
   explicit Store(std::unique_ptr<Connection> connection, const std::string& url, bool create, std::string path = "");
   // Appends one run with its points and samples in one transaction; returns its id.
-  std::int64_t append(const RunRow& run, const std::vector<PointRow>& points);
+  std::int64_t append(const RunRow& run, const std::vector<PointRow>& points, const std::vector<HeadlineRow>& headlines = {});
+  // A results document (a sweep's, stability's, ab's) appended as one run: run_of, points_of and
+  // headlines_of, the one way every command and import appends.
+  std::int64_t append_document(const nlohmann::json& doc, const std::string& command, const std::string& source);
   std::vector<RunRow> runs();
   std::vector<PointRow> points(std::int64_t run_id);
   // Every complete run's value for `point_id` (of every sweep that has it), oldest first (by date, then id).
   std::vector<SeriesValue> series(const std::string& point_id);
   // The distinct point ids, with the sweep each belongs to.
   std::vector<std::pair<std::string, std::string>> point_ids();
+  std::vector<HeadlineRow> headlines(std::int64_t run_id);
+  // Every complete run's value of headline figure `name`, oldest first, as series() (median_ms: the value).
+  std::vector<SeriesValue> headline_series(const std::string& name);
+  // The distinct headline figures: (name, sweep) and their unit.
+  std::vector<std::pair<std::pair<std::string, std::string>, std::string>> headline_names();
   // What the store takes on disk: PostgreSQL's database size (its tables, indexes and their overhead);
   // SQLite's file (call after the last writer closed, so the write-ahead log is checkpointed into it).
   std::uint64_t size_bytes();
@@ -87,15 +109,27 @@ class Store {
  private:
   std::unique_ptr<Connection> connection_;
   std::string url_, path_;  // path_: SQLite's file
+  bool has_headlines_ = false;  // a store written before headline figures were stored lacks the table
 };
 
 // What identifies the machine a run was measured on: device, driver, CPU model and cores,
 // LP_NUM_THREADS. Runs with different keys are different series.
 std::string machine_key(const nlohmann::json& context);
 
-// A sweep's results document (figure9.json, ...) as a run and its points.
+// A sweep's results document (figure9.json, ...) as a run and its points. stability.json is a run of
+// headline figures only (no timed points).
 RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::string& source);
 std::vector<PointRow> points_of(const nlohmann::json& doc);
+// The document's headline figures (HeadlineRow), read from what its command derived: figure9's
+// naive_over_flag and series fits, adaptive's comparisons, buffers' streamed_vs_full, an ab run's
+// paired_ratios, stability's safe ranges. tradeoff has none (its Pareto front is a set, not a figure).
+std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc);
+
+// A command's run appended to the store at `url` once its results file is written (the file is the
+// run's output; the store its history), as `doc` (with its schema and context) by Store::append_document;
+// prints the run's id. Every command appends through here. Throws, naming the store, when it cannot take
+// the run.
+std::int64_t append_run(const std::string& url, const nlohmann::json& doc, const std::string& command);
 
 // The default store of a sweep: <out_dir>/history.sqlite.
 std::string default_store_url(const std::string& out_dir);

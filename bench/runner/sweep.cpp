@@ -524,13 +524,7 @@ void append_to_store(const SweepSettings& s, const nlohmann::json& context, cons
   nlohmann::json doc = body;
   doc["schema"] = "bokehbench." + s.name;
   doc["context"] = context;
-  try {
-    auto store = history::Store::open(s.store_url, true);
-    const auto id = store->append(history::run_of(doc, command_line(), "run"), history::points_of(doc));
-    fmt::print("appended run {} ({}) to the results store {}\n", id, doc.value("status", ""), store->url());
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("the results file is written, but {}", e.what()));
-  }
+  history::append_run(s.store_url, doc, command_line());
 }
 
 }  // namespace

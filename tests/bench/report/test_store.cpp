@@ -106,6 +106,111 @@ TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
   EXPECT_FALSE(points[0].settled);
 }
 
+// Headline figures are series of their own: a paired ratio with its interval, per commit, with the
+// step at the commit it was injected; figures read from documents as their commands write them.
+TEST_P(StoreTest, HeadlineFiguresAreSeriesWithTheirIntervals) {
+  auto store = Store::open(url_, true);
+  for (int c = 0; c < 12; ++c) {
+    const double r = c < 7 ? 1.0 : 1.06;  // a 6% step: the paired ratio's interval is +-1%
+    const double wiggle = 1 + 0.002 * ((c * 7) % 5 - 2);
+    store->append(a_run(fmt::format("c{:02d}", c), fmt::format("2026-01-01T00:{:02d}:00Z", c)), two_points(1),
+                  {{"new_over_old/naive/gpu/x", "ratio", r * wiggle, r * wiggle * 0.99, r * wiggle * 1.01},
+                   {"exponent/flag/gpu/larger_half", "exponent", 1.0, std::nullopt, std::nullopt}});
+  }
+  const auto runs = store->runs();
+  const auto h = store->headlines(runs[0].id);
+  ASSERT_EQ(h.size(), 2u);  // by name
+  EXPECT_EQ(h[0].name, "exponent/flag/gpu/larger_half");
+  EXPECT_FALSE(h[0].low.has_value());
+  EXPECT_EQ(h[1].unit, "ratio");
+  EXPECT_DOUBLE_EQ(*h[1].low, h[1].value * 0.99);
+  const auto ratio = series(*store, "new_over_old/naive/gpu/x", Metric::wall, {});
+  ASSERT_EQ(ratio.size(), 1u);
+  EXPECT_TRUE(ratio[0].headline);
+  EXPECT_EQ(ratio[0].unit, "ratio");
+  ASSERT_EQ(ratio[0].values.size(), 12u);
+  EXPECT_TRUE(ratio[0].values[3].has_interval);
+  EXPECT_DOUBLE_EQ(ratio[0].values[3].q3_ms, ratio[0].values[3].median_ms * 1.01);
+  ASSERT_EQ(ratio[0].steps.size(), 1u);
+  EXPECT_EQ(ratio[0].steps[0].commit, "c07");
+  const auto exponent = series(*store, "exponent/flag/gpu/larger_half", Metric::wall, {});
+  ASSERT_EQ(exponent.size(), 1u);
+  EXPECT_TRUE(exponent[0].steps.empty());  // constant: no change point
+  EXPECT_FALSE(exponent[0].values[0].has_interval);
+  EXPECT_EQ(series(*store, "", Metric::wall, {}).size(), 4u);  // two points, two figures
+  HtmlReportInput in;
+  in.runs = runs;
+  in.series = ratio;
+  const std::string html = html_report(in);
+  EXPECT_NE(html.find("class=\"trend headline\""), std::string::npos);
+  EXPECT_NE(html.find("95% interval"), std::string::npos);
+}
+
+TEST(Headlines, ReadFromWhatEachCommandDerives) {
+  const nlohmann::json figure9 = {
+      {"schema", "bokehbench.figure9"},
+      {"naive_over_flag", {{{"N", 9}, {"backend", "gpu"}, {"naive_over_flag", 0.75}, {"low", 0.73}, {"high", 0.77}}}},
+      {"series", {{{"method", "flag"}, {"variant", ""}, {"backend", "cpu"},
+                   {"fits", {{"larger_half", {{"exponent", 1.1}, {"low", 1.0}, {"high", 1.2}}}}}}}}};
+  auto h = headlines_of(figure9);
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h[0].name, "naive_over_flag/gpu/N:9");
+  EXPECT_EQ(*h[0].high, 0.77);
+  EXPECT_EQ(h[1].name, "exponent/flag/cpu/larger_half");
+  EXPECT_EQ(h[1].unit, "exponent");
+  const nlohmann::json adaptive = {{"schema", "bokehbench.adaptive"},
+                                   {"comparisons", {{{"off_id", "naive/a"}, {"speedup", 9.0},
+                                                     {"speedup_same_round", {{"median", 10.0}, {"low", 9.5}, {"high", 10.5}}}},
+                                                    {{"off_id", "flag/a"}, {"speedup", 2.0}, {"speedup_same_round", nullptr}}}}};
+  h = headlines_of(adaptive);
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h[0].name, "speedup/naive/a");
+  EXPECT_EQ(h[0].value, 10.0);  // the paired figure when the run has it
+  EXPECT_EQ(h[1].value, 2.0);
+  EXPECT_FALSE(h[1].low.has_value());
+  const nlohmann::json ab = {{"schema", "bokehbench.ab-figure9"},
+                             {"paired_ratios", {{{"id", "naive/x"}, {"ratio", 1.02}, {"low", 1.0}, {"high", 1.04}}}}};
+  h = headlines_of(ab);
+  ASSERT_EQ(h.size(), 1u);
+  EXPECT_EQ(h[0].name, "new_over_old/naive/x");
+  // stability: the safe range's extent in cases around the nominal one, and the failures.
+  const nlohmann::json stability = {
+      {"schema", "bokehbench.stability"},
+      {"context", nlohmann::json::object()},
+      {"configurations",
+       {{{"method", "flag"}, {"precision", "f16"}, {"backend", "gpu"},
+         {"cases", {{{"axis", "radius"}, {"label", "0"}, {"status", "ok"}}, {{"axis", "radius"}, {"label", "4"}, {"status", "ok"}},
+                    {{"axis", "radius"}, {"label", "16"}, {"status", "ok"}}, {{"axis", "radius"}, {"label", "64"}, {"status", "fail"}}}},
+         {"safe_ranges", {{"radius", {{"low", "0"}, {"high", "16"}}}, {"disc", {{"low", nullptr}, {"high", nullptr}}}}}},
+        {{"method", "x"}, {"precision", "f32"}, {"backend", "gpu"}, {"skipped", "needs what the device lacks"}}}}};
+  h = headlines_of(stability);
+  ASSERT_EQ(h.size(), 3u);
+  EXPECT_EQ(h[0].name, "flag/f16/gpu/failing_cases");
+  EXPECT_EQ(h[0].value, 1);
+  EXPECT_EQ(h[1].name, "flag/f16/gpu/safe_range_cases/disc");
+  EXPECT_EQ(h[1].value, 0);
+  EXPECT_EQ(h[2].name, "flag/f16/gpu/safe_range_cases/radius");
+  EXPECT_EQ(h[2].value, 3);
+  EXPECT_EQ(run_of(stability, "c", "s").sweep, "stability");  // a run of figures only
+  EXPECT_TRUE(headlines_of({{"schema", "bokehbench.tradeoff"}, {"pareto_front", {"a"}}}).empty());
+}
+
+// A store written before headline figures were stored: read as it is (no figures), and given the
+// table on its first append.
+TEST_P(StoreTest, StoreWithoutTheHeadlinesTableStillReadsAndTakesFigures) {
+  Store::open(url_, true)->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));
+  sql("DROP TABLE headlines");
+  {
+    auto reader = Store::open(url_, false);
+    EXPECT_EQ(reader->runs().size(), 1u);
+    EXPECT_TRUE(reader->headlines(reader->runs()[0].id).empty());
+    EXPECT_EQ(series(*reader, "", Metric::wall, {}).size(), 2u);
+  }
+  auto writer = Store::open(url_, true);
+  writer->append(a_run("c2", "2026-01-02T00:00:00Z"), two_points(1), {{"f", "ratio", 1.5, std::nullopt, std::nullopt}});
+  EXPECT_EQ(writer->headlines(writer->runs()[1].id).size(), 1u);
+}
+
 TEST_P(StoreTest, SeriesOverCommitsFindTheStepAndSkipInterruptedRuns) {
   auto store = Store::open(url_, true);
   for (int c = 0; c < 12; ++c)
