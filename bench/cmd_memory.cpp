@@ -1,7 +1,7 @@
 // `bokehbench memory`: FLAG's 3D buffer size in the paper's convention and as the driver allocates it,
 // and the streamed layers' ring (layer_buffer = streamed) beside it, one row per --band-rows. With
-// --aperture, the layers FLAG keeps for that shape (flag_shape.hpp: N unless mirror-symmetric), on the
-// path that draws it (the full buffer at scale 1).
+// --aperture, the layers FLAG keeps for that shape (flag_shape.hpp: N unless mirror-symmetric), in the
+// full buffer at scale 1 (the streamed ring of a shape: `flag`'s gpu_memory, tested beside the driver).
 #include <fmt/format.h>
 
 #include "commands.hpp"
@@ -50,7 +50,7 @@ void memory(MemoryOptions& o) {
   fmt::print("FLAG 3D buffer, {}x{}, {}x{} gather ({} layers), aperture {}, device {}\n", o.width_px, o.height_px,
              o.size_n, o.size_n, layers, o.aperture.name(), ctx.info().name);
   if (shape)
-    fmt::print("  {} layers: {} (scale 1, full buffer: the path FLAG draws this aperture on)\n", o.aperture.name(),
+    fmt::print("  {} layers: {} (full buffer, scale 1)\n", o.aperture.name(),
                layers == pattern.layers() ? "one half, mirror-symmetric" : "both halves, not mirror-symmetric");
   fmt::print("{:<17} {:<7} {:>14} {:>14} {:>16} {:>12} {:>12}\n", "precision", "scale", "buffer (texels)",
              "paper conv MiB", "allocated MiB", "allocated B", "paper prints");

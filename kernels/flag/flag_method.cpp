@@ -152,12 +152,14 @@ Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
   return s == 1 ? blurred : flag_upsample(blurred, in.color, in.radius_px, s);
 }
 
-// A non-disc aperture (flag_shape.hpp) on FLAG's main path: the layers' extent (N layers unless the
-// shape is mirror-symmetric) as the driver allocates it, the shape-weighted input (vec4 a pixel),
-// naive's sorted gauges and the chord table.
+// A non-disc aperture (flag_shape.hpp): the layers (N unless the shape is mirror-symmetric; streamed:
+// the ring's rows) as the driver allocates them, the shape-weighted input (vec4 a pixel), naive's
+// sorted gauges and the chord table.
 MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, int w, int h, vk::Context* ctx) {
   const FlagShapeTable table(aperture, c.pattern);
-  const FlagBufferExtent e{w, h, table.layers()};
+  // Streamed: the ring as the GPU driver sizes it; no device: lavapipe's choice.
+  const FlagStreamRing ring = flag_shape_layer_rows(c, table.layers(), w, h, ctx ? ctx->info().is_software() : true);
+  const FlagBufferExtent& e = ring.extent;
   MemoryUse use;
   const std::uint64_t texels = e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
   std::uint64_t layers = texels;
@@ -176,10 +178,12 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
                  {"layer_halves", table.halved ? 1 : 2},
                  {"paper_convention_bytes", static_cast<double>(texels)},
                  {"other_bytes", weighted + tables}};
+  if (c.streamed) use.details["streamed"] = {{"band_rows", ring.band_rows}, {"ring_rows", e.height}};
   return use;
 }
 
-// Why FLAG cannot draw a non-disc aperture with these options ("" when it can): the main path only.
+// Why FLAG cannot draw a non-disc aperture with these options ("" when it can): the per-value
+// precisions at full resolution with indexed bins, adaptive off, in the full or the streamed buffer.
 std::string flag_shape_unsupported(const FilterOptions& o) {
   if (o.aperture.is_disc()) return "";
   const FlagConfig c = flag_config(o);
@@ -187,12 +191,11 @@ std::string flag_shape_unsupported(const FilterOptions& o) {
   if (is_bracketed(c.precision)) why.push_back("precision " + o.precision);
   if (c.buffer_scale != 1) why.push_back(fmt::format("buffer scale {}", c.buffer_scale));
   if (c.adaptive) why.push_back("adaptive = on");
-  if (c.streamed) why.push_back("layer_buffer = streamed");
   if (c.horizontal_bins == FlagHorizontalBins::masked || c.horizontal_bins == FlagHorizontalBins::scan)
     why.push_back("horizontal_bins = " + flag_horizontal_bins().at(static_cast<std::size_t>(c.horizontal_bins)));
   if (why.empty()) return "";
-  return fmt::format("flag draws the aperture {} on its main path only (full layer buffer, f32, f16 or r11g11b10f, "
-                     "indexed bins, buffer scale 1, adaptive off), not with {}",
+  return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, indexed bins, buffer scale 1 "
+                     "and adaptive off (full or streamed layers), not with {}",
                      o.aperture.name(), fmt::join(why, ", "));
 }
 
@@ -246,7 +249,7 @@ void declare_flag(std::vector<Method>& methods) {
     needs.subgroup_arithmetic = c.adaptive;  // the tile map's bound is shared across a subgroup
     return needs;
   };
-  // Any convex aperture by per-layer chord extents (flag_shape.hpp), on the main path.
+  // Any convex aperture by per-layer chord extents (flag_shape.hpp); flag_shape_unsupported says with what.
   m.aperture_unsupported = flag_shape_unsupported;
   m.cpu_reference = [](const CpuInput& in) {
     const FlagConfig c = flag_config(in.options);
@@ -268,9 +271,13 @@ void declare_flag(std::vector<Method>& methods) {
     // over N row / column samples, through N layers unless the shape is mirror-symmetric.
     const double pixels = static_cast<double>(w) * h;
     const double layer_bytes = pixels * flag_aperture_layers(o.aperture, c.pattern) * bytes_per_texel(c.precision);
-    return std::vector<PassWork>{{"shape_pack", pixels, pixels * 32, pixels * 16},
-                                 {"horizontal", pixels * c.pattern.size_n, pixels * 16, layer_bytes},
-                                 {"vertical", pixels * c.pattern.size_n, layer_bytes, pixels * 16}};
+    std::vector<PassWork> work = {{"shape_pack", pixels, pixels * 32, pixels * 16}};
+    if (c.streamed)  // both passes band by band under one timestamp (flag_work)
+      work.push_back({"streamed", 2 * pixels * c.pattern.size_n, pixels * 16 + layer_bytes, layer_bytes + pixels * 16});
+    else
+      work.insert(work.end(), {{"horizontal", pixels * c.pattern.size_n, pixels * 16, layer_bytes},
+                               {"vertical", pixels * c.pattern.size_n, layer_bytes, pixels * 16}});
+    return work;
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
     if (!o.aperture.is_disc()) return flag_shape_gpu_memory(flag_config(o), o.aperture, w, h, ctx);

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include "aperture.hpp"
 #include "flag.hpp"
@@ -112,14 +114,16 @@ TEST(FlagShape, ConservesEnergyForEveryShape) {
   }
 }
 
-// The method's main path draws every shape; the other paths say why not, naming the option.
+// The full and the streamed buffer draw every shape; the other paths say why not, naming the option.
 TEST(FlagShape, DeclaresItsScope) {
   const Method& flag = find_method("flag");
   FilterOptions o = flag.defaults({9, 2});
   o.aperture = parse_aperture("blades5");
   EXPECT_EQ(aperture_unsupported(flag, o), "");
-  for (const auto& [key, value, words] : {std::tuple{"layer_buffer", 1.0, "layer_buffer = streamed"},
-                                          std::tuple{"adaptive", 1.0, "adaptive = on"},
+  FilterOptions streamed = o;
+  streamed.values["layer_buffer"] = 1;
+  EXPECT_EQ(aperture_unsupported(flag, streamed), "");
+  for (const auto& [key, value, words] : {std::tuple{"adaptive", 1.0, "adaptive = on"},
                                           std::tuple{"horizontal_bins", 3.0, "horizontal_bins = scan"},
                                           std::tuple{"horizontal_bins", 2.0, "horizontal_bins = masked"}}) {
     FilterOptions v = o;
@@ -191,6 +195,45 @@ TEST(FlagShape, GpuMatchesCpuReference) {
             diff = std::max(diff, static_cast<double>(std::abs(gpu.pixels[i] - cpu.pixels[i])));
           EXPECT_LE(diff / largest(cpu), flag.gpu_tolerance(o));
         }
+}
+
+// Streamed layers (a ring of B + 2 n k rows, band by band) give the full buffer's image bit for bit,
+// both halves or one, in less memory; the model sizes the ring as the driver allocates it.
+TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
+  const Method& flag = find_method("flag");
+  const Scene s = make_scene("hoops", 61, 47);
+  const GatherPattern pattern{9, 2};
+  for (const char* name : {"blades5", "blades6"})
+    for (const char* precision : {"f32", "f16"}) {
+      SCOPED_TRACE(std::string(name) + " " + precision);
+      FilterOptions o = flag.defaults(pattern);
+      o.precision = precision;
+      o.aperture = parse_aperture(name);
+      Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+      lens.aperture = o.aperture;
+      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+      vk::TimestampQueries timer(context(), 16);
+      auto full = flag.make_gpu(frame, o);
+      gpu::run_frames(frame, *full, timer);
+      const Image expected = frame.read_output();
+      for (int band : {1, 5, 0}) {
+        FilterOptions streamed = o;
+        streamed.values["layer_buffer"] = 1;
+        streamed.values["band_rows"] = band;
+        auto filter = flag.make_gpu(frame, streamed);
+        const auto passes = gpu::run_frames(frame, *filter, timer);
+        EXPECT_EQ(passes.back().pass, "streamed");
+        const Image got = frame.read_output();
+        EXPECT_EQ(got.pixels, expected.pixels) << "band " << band;
+        const MemoryUse model = flag.gpu_memory(streamed, 61, 47, &context());
+        EXPECT_GE(filter->intermediate_bytes(), model.bytes) << band;
+        EXPECT_LE(filter->intermediate_bytes(), model.bytes + 3 * 256) << band;
+        if (band == 1 || band == 5) {
+          EXPECT_EQ(model.details["extent"]["height"], band + 2 * pattern.half() * pattern.spacing_px);
+          EXPECT_LT(filter->intermediate_bytes(), full->intermediate_bytes()) << band;
+        }
+      }
+    }
 }
 
 }  // namespace
