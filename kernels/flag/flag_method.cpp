@@ -156,9 +156,9 @@ Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
 // the ring's rows) as the driver allocates them, the shape-weighted input (vec4 a pixel), naive's
 // sorted gauges and the chord table.
 MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, int w, int h, vk::Context* ctx) {
-  const FlagShapeTable table(aperture, c.pattern);
+  const int layer_count = flag_aperture_layers(aperture, c.pattern);
   // Streamed: the ring as the GPU driver sizes it; no device: lavapipe's choice.
-  const FlagStreamRing ring = flag_shape_layer_rows(c, table.layers(), w, h, ctx ? ctx->info().is_software() : true);
+  const FlagStreamRing ring = flag_shape_layer_rows(c, layer_count, w, h, ctx ? ctx->info().is_software() : true);
   const FlagBufferExtent& e = ring.extent;
   MemoryUse use;
   const std::uint64_t texels = e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
@@ -168,14 +168,14 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
     use.from_driver = true;
   }
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
-                      tables = table.lattice.sorted.size() * sizeof(float) + table.bytes();
+                      tables = c.pattern.samples_per_pixel() * sizeof(float) + FlagShapeTable::bytes_for(c.pattern);
   use.bytes = layers + weighted + tables;
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
                  {"bytes_per_texel", bytes_per_texel(c.precision)},
                  {"layer_buffer_bytes", layers},
                  {"texel_bytes", texels},
                  {"aperture", aperture.name()},
-                 {"layer_halves", table.halved ? 1 : 2},
+                 {"layer_halves", layer_count == c.pattern.layers() ? 1 : 2},
                  {"paper_convention_bytes", static_cast<double>(texels)},
                  {"other_bytes", weighted + tables}};
   if (c.streamed) use.details["streamed"] = {{"band_rows", ring.band_rows}, {"ring_rows", e.height}};

@@ -24,9 +24,18 @@ bool lattice_mirror_exact(const ShapeLattice& lattice) {
 
 }  // namespace
 
+bool flag_layers_halved(const Aperture& aperture, const ShapeLattice& lattice) {
+  return aperture.vertically_symmetric() && lattice_mirror_exact(lattice);
+}
+
+std::uint64_t FlagShapeTable::bytes_for(const GatherPattern& pattern) {
+  const auto side = static_cast<std::uint64_t>(pattern.size_n);
+  return side * (side * side + 1) * sizeof(std::int32_t);
+}
+
 FlagShapeTable::FlagShapeTable(const Aperture& aperture, const GatherPattern& pattern)
     : lattice(aperture, pattern), half_n(pattern.half()), side(pattern.size_n) {
-  halved = aperture.vertically_symmetric() && lattice_mirror_exact(lattice);
+  halved = flag_layers_halved(aperture, lattice);
   const int n = half_n;
   const std::size_t offsets = static_cast<std::size_t>(side) * side, areas = offsets + 1;
   chords.assign(static_cast<std::size_t>(side) * areas, 0);
@@ -63,8 +72,8 @@ FlagShapeTable::FlagShapeTable(const Aperture& aperture, const GatherPattern& pa
 }
 
 int flag_aperture_layers(const Aperture& aperture, const GatherPattern& pattern) {
-  if (aperture.is_disc()) return pattern.layers();
-  return FlagShapeTable(aperture, pattern).layers();
+  if (aperture.is_disc() || flag_layers_halved(aperture, ShapeLattice(aperture, pattern))) return pattern.layers();
+  return pattern.size_n;
 }
 
 Image flag_shape_pack(const Image& color, const Image& radius_px, const FlagShapeTable& table, int threads) {

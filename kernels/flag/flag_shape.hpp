@@ -46,10 +46,15 @@ struct FlagShapeTable {
     return chords[static_cast<std::size_t>(column) * (static_cast<std::size_t>(side) * side + 1) + area];
   }
   std::uint64_t bytes() const { return chords.size() * sizeof(std::int32_t); }
+  // bytes() of any aperture's table on this pattern, without building it.
+  static std::uint64_t bytes_for(const GatherPattern& pattern);
 };
 
+// Whether FLAG keeps one half of the layers for this aperture: vertically symmetric and its float
+// lattice mirror-exact (FlagShapeTable::halved).
+bool flag_layers_halved(const Aperture& aperture, const ShapeLattice& lattice);
 // Layers FLAG stores for this aperture: (N + 1) / 2 for the disc and mirror-symmetric shapes, N for
-// the others (FlagShapeTable::layers()).
+// the others (FlagShapeTable::layers()), from the lattice alone (no chord table).
 int flag_aperture_layers(const Aperture& aperture, const GatherPattern& pattern);
 
 // Colour / area (ShapeLattice::area of the radius) and the area as a float: the horizontal pass's

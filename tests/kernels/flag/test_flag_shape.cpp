@@ -69,6 +69,8 @@ TEST(FlagShape, MatchesNaiveShapeGatherForEveryShape) {
       const FlagShapeTable table(aperture, pattern);
       EXPECT_EQ(table.halved, shape.halved);
       EXPECT_EQ(table.layers(), shape.halved ? pattern.layers() : pattern.size_n);
+      EXPECT_EQ(flag_aperture_layers(aperture, pattern), table.layers());
+      EXPECT_EQ(FlagShapeTable::bytes_for(pattern), table.bytes());
       const Image naive = naive_shape_gather(color, radius, ShapeLattice(aperture, pattern), pattern, 2);
       const double top = largest(naive);
       for (const auto& [precision, relative] : {std::pair{LayerPrecision::f32, 0.0},
