@@ -183,7 +183,7 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
 }
 
 // Why FLAG cannot draw a non-disc aperture with these options ("" when it can): the per-value
-// precisions at full resolution with indexed bins, adaptive off, in the full or the streamed buffer.
+// precisions at full resolution with indexed or masked bins, adaptive off, full or streamed layers.
 std::string flag_shape_unsupported(const FilterOptions& o) {
   if (o.aperture.is_disc()) return "";
   const FlagConfig c = flag_config(o);
@@ -191,11 +191,10 @@ std::string flag_shape_unsupported(const FilterOptions& o) {
   if (is_bracketed(c.precision)) why.push_back("precision " + o.precision);
   if (c.buffer_scale != 1) why.push_back(fmt::format("buffer scale {}", c.buffer_scale));
   if (c.adaptive) why.push_back("adaptive = on");
-  if (c.horizontal_bins == FlagHorizontalBins::masked || c.horizontal_bins == FlagHorizontalBins::scan)
-    why.push_back("horizontal_bins = " + flag_horizontal_bins().at(static_cast<std::size_t>(c.horizontal_bins)));
+  if (c.horizontal_bins == FlagHorizontalBins::scan) why.push_back("horizontal_bins = scan");
   if (why.empty()) return "";
-  return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, indexed bins, buffer scale 1 "
-                     "and adaptive off (full or streamed layers), not with {}",
+  return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, indexed or masked bins, buffer "
+                     "scale 1 and adaptive off (full or streamed layers), not with {}",
                      o.aperture.name(), fmt::join(why, ", "));
 }
 

@@ -2,7 +2,7 @@
 // pixel), horizontal_shape (chord extents into a 3D image of (N + 1) / 2 or N layers), vertical.
 // layer_buffer = streamed (flag_gpu.hpp): the layers in a ring of B + 2 n k rows, the two passes
 // alternating per band, as the disc's FLAG does (the full buffer's image bit for bit). f32 / f16 /
-// r11g11b10f, indexed bins, scale 1, adaptive off (flag_method.cpp's aperture_unsupported refuses the
+// r11g11b10f, indexed or masked bins, scale 1, adaptive off (flag_method.cpp's aperture_unsupported refuses the
 // others before this is made).
 #include <algorithm>
 #include <stdexcept>
@@ -21,6 +21,13 @@ namespace {
 
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
 
+// The shapes' binning: indexed or masked as chosen; auto as for the disc (masked on lavapipe up to 21
+// layers), except that where the disc's auto takes the scan, which shapes do not have, indexed.
+FlagHorizontalBins shape_binning(const FlagConfig& c, const vk::DeviceInfo& device, int layers) {
+  const FlagHorizontalBins bins = flag_horizontal_binning(c.horizontal_bins, device, layers);
+  return bins == FlagHorizontalBins::scan ? FlagHorizontalBins::indexed : bins;
+}
+
 class FlagShape final : public gpu::GpuFilter {
  public:
   FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture)
@@ -38,11 +45,14 @@ class FlagShape final : public gpu::GpuFilter {
                 static_cast<std::uint32_t>(rows_.extent.height), static_cast<std::uint32_t>(table_.layers())),
         pack_(frame.ctx, vk::spirv("flag/shape_pack"), std::vector<VkDescriptorType>(4, kBuffer),
               sizeof(gpu::PassParams)),
-        // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 7 LAYER_ROWS (0: the full buffer), 8 BOTH_HALVES.
+        // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 7 LAYER_ROWS (0: the full
+        // buffer), 8 BOTH_HALVES.
         horizontal_(frame.ctx, vk::spirv("flag/horizontal_shape_" + std::string(to_string(config.precision))),
                     std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}, sizeof(gpu::PassParams),
-                    std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, outputs_, 0, 0, 0,
-                                              layer_ring_rows(), !table_.halved}),
+                    std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, outputs_, 0,
+                                              shape_binning(config, frame.ctx.info(), table_.layers()) ==
+                                                  FlagHorizontalBins::masked,
+                                              0, layer_ring_rows(), !table_.halved}),
         vertical_(frame.ctx, vk::spirv("flag/vertical_" + std::string(to_string(config.precision))),
                   std::vector<VkDescriptorType>{kImage, kBuffer}, sizeof(gpu::PassParams),
                   std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(), !table_.halved}) {

@@ -4,7 +4,10 @@
 // one load from the chord table by (column, area), binned as a difference along the layers
 // (+colour at hi, -colour at lo - 1; halved shapes: at hi only, layer |dz|), then accumulated from
 // the outermost layer inwards. OUTPUTS pixels per invocation at stride k share each loaded sample;
-// every pixel adds its samples in the same order. Indexed bins only (horizontal_bins auto/indexed).
+// every pixel adds its samples in the same order. MASKED_BINS (layers.glsl; horizontal_bins = masked,
+// auto on lavapipe up to 21 layers): every bin takes +colour, -colour or -0.0 by a compare, with no
+// dynamically indexed array (which lavapipe turns into a scalar load and store per lane): the same
+// additions per bin as indexed, so the same layers bit for bit (x - s == x + (-s), x + -0.0 == x).
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 #include "layers.glsl"
@@ -34,7 +37,10 @@ void main() {
       const int chord = chords[(n - di) * areas + area];
       if (chord == 0) continue;
       const int lo = (chord & 0xffff) - n, hi = (chord >> 16) - n - 1;
-      if (BOTH_HALVES) {
+      if (MASKED_BINS) {
+        const int far = BOTH_HALVES ? hi + n : hi, past = BOTH_HALVES && lo > -n ? lo - 1 + n : -1;
+        for (int z = 0; z < LAYERS; ++z) bins[m][z] += z == far ? s.rgb : (z == past ? -s.rgb : vec3(-0.0));
+      } else if (BOTH_HALVES) {
         bins[m][hi + n] += s.rgb;
         if (lo > -n) bins[m][lo - 1 + n] -= s.rgb;
       } else {
