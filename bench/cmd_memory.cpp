@@ -1,10 +1,13 @@
 // `bokehbench memory`: FLAG's 3D buffer size in the paper's convention and as the driver allocates it,
-// and the streamed layers' ring (layer_buffer = streamed) beside it, one row per --band-rows.
+// and the streamed layers' ring (layer_buffer = streamed) beside it, one row per --band-rows. With
+// --aperture, the layers FLAG keeps for that shape (flag_shape.hpp: N unless mirror-symmetric), in the
+// full buffer at scale 1 (the streamed ring of a shape: `flag`'s gpu_memory, tested beside the driver).
 #include <fmt/format.h>
 
 #include "commands.hpp"
 #include "flag_memory.hpp"
 #include "flag_gpu.hpp"
+#include "flag_shape.hpp"
 #include "method.hpp"
 #include "report.hpp"
 #include "sweep.hpp"
@@ -19,11 +22,14 @@ struct MemoryOptions {
   int width_px = 0, height_px = 0, size_n = 0;  // from axes (memory() sets them)
   std::string device, out_path = "results/memory.json";
   std::vector<int> band_rows = {0};  // streamed rows: band heights (0: the device's auto)
+  Aperture aperture;                 // from axes (memory() sets it)
 };
 
 // The figures the paper prints (sections 3.2.4 and 5), for comparison only: 1080p, 41x41, RGBA16F.
 double paper_printed_mb(const MemoryOptions& o, LayerPrecision precision, int scale) {
-  if (o.width_px != 1920 || o.height_px != 1080 || o.size_n != 41 || precision != LayerPrecision::f16) return 0;
+  if (o.width_px != 1920 || o.height_px != 1080 || o.size_n != 41 || precision != LayerPrecision::f16 ||
+      !o.aperture.is_disc())
+    return 0;
   return scale == 1 ? 332.0 : scale == 2 ? 42.0 : 5.2;
 }
 
@@ -32,13 +38,20 @@ void memory(MemoryOptions& o) {
   const Resolution frame = o.axes.frame_sizes().front();
   o.width_px = frame.width_px, o.height_px = frame.height_px;
   o.size_n = o.axes.patterns().front().size_n;  // the buffer does not depend on the spacing
+  o.aperture = o.axes.aperture_shapes().front();
   check_writable_file(o.out_path);
   vk::Context ctx(o.device);
   nlohmann::json rows = nlohmann::json::array();
   const GatherPattern pattern{o.size_n, 2};
   validate(pattern);
-  fmt::print("FLAG 3D buffer, {}x{}, {}x{} gather ({} layers), device {}\n", o.width_px, o.height_px, o.size_n,
-             o.size_n, pattern.layers(), ctx.info().name);
+  // A non-disc aperture: its layers, at scale 1 and full only (what FLAG draws it with).
+  const int layers = flag_aperture_layers(o.aperture, pattern);
+  const bool shape = !o.aperture.is_disc();
+  fmt::print("FLAG 3D buffer, {}x{}, {}x{} gather ({} layers), aperture {}, device {}\n", o.width_px, o.height_px,
+             o.size_n, o.size_n, layers, o.aperture.name(), ctx.info().name);
+  if (shape)
+    fmt::print("  {} layers: {} (full buffer, scale 1)\n", o.aperture.name(),
+               layers == pattern.layers() ? "one half, mirror-symmetric" : "both halves, not mirror-symmetric");
   fmt::print("{:<17} {:<7} {:>14} {:>14} {:>16} {:>12} {:>12}\n", "precision", "scale", "buffer (texels)",
              "paper conv MiB", "allocated MiB", "allocated B", "paper prints");
   for (const auto& name : o.axes.precisions) {
@@ -48,7 +61,8 @@ void memory(MemoryOptions& o) {
       return nlohmann::json{{"width_px", o.width_px},
                             {"height_px", o.height_px},
                             {"gather_n", o.size_n},
-                            {"layers_full", pattern.layers()},
+                            {"layers_full", layers},
+                            {"aperture", o.aperture.name()},
                             {"precision", name},
                             {"bytes_per_texel", bytes_per_texel(precision)},
                             {"scale", scale},
@@ -57,8 +71,13 @@ void memory(MemoryOptions& o) {
                             {"allocated_mib", allocated / kMiB}};
     };
     for (int scale : o.axes.scales.empty() ? find_method("flag").buffer_scales : o.axes.scales) {
-      const FlagBufferExtent extent = flag_buffer_extent(o.width_px, o.height_px, pattern, scale);
-      const double paper_bytes = flag_paper_bytes(o.width_px, o.height_px, pattern, precision, scale);
+      if (shape && scale != 1) continue;
+      FlagBufferExtent extent = flag_buffer_extent(o.width_px, o.height_px, pattern, scale);
+      double paper_bytes = flag_paper_bytes(o.width_px, o.height_px, pattern, precision, scale);
+      if (shape) {
+        extent.layers = layers;
+        paper_bytes = static_cast<double>(extent.texels()) * bytes_per_texel(precision);
+      }
       const auto allocated = vk::image_3d_requirement_bytes(ctx, layer_format(precision), extent.width,
                                                             extent.height, extent.layers);
       const double printed = paper_printed_mb(o, precision, scale);
@@ -69,14 +88,24 @@ void memory(MemoryOptions& o) {
       row.update({{"layer_buffer", "full"},
                   {"paper_convention_bytes", paper_bytes},
                   {"paper_convention_mib", paper_bytes / kMiB},
-                  {"texel_bytes", flag_texel_bytes(o.width_px, o.height_px, pattern, precision, scale)}});
+                  {"texel_bytes", extent.texels() * bytes_per_texel(precision)}});
       if (printed > 0) row["paper_printed_mb"] = printed;
+      if (shape) {  // beside the layers: the shape-weighted input and the chord tables (flag's gpu_memory)
+        FilterOptions options = find_method("flag").defaults(pattern);
+        options.precision = name;
+        options.aperture = o.aperture;
+        const MemoryUse use = find_method("flag").gpu_memory(options, o.width_px, o.height_px, &ctx);
+        row["other_bytes"] = use.details["other_bytes"];
+        row["method_bytes"] = use.bytes;
+        fmt::print("{:<17} {:<7} plus {} B of shape-weighted input and chord tables: {} B ({:.2f} MiB) in all\n", "",
+                   "", use.details["other_bytes"].get<std::uint64_t>(), use.bytes, use.bytes / kMiB);
+      }
       rows.push_back(row);
     }
     // Streamed: a ring of B + 2 n k rows at full resolution, sized as the GPU driver sizes it.
     // The full buffer does not depend on k; the ring's rows do (n k): the pattern's own k.
     const GatherPattern grid = o.axes.patterns().front();
-    for (int requested : o.band_rows) {
+    for (int requested : shape ? std::vector<int>{} : o.band_rows) {
       const FlagStreamRing ring = flag_stream_ring(flag_buffer_extent(o.width_px, o.height_px, grid, 1),
                                                    grid.spacing_px, precision, requested, ctx.info().is_software());
       const FlagBufferExtent& e = ring.extent;
@@ -116,7 +145,7 @@ void add_memory_command(CLI::App& app) {
   a.resolutions = {"1920x1080"};
   a.sizes = {"41x1"};  // the paper's 41x41 gather at full resolution: k = 1 (the ring's rows depend on k)
   a.precisions = {"f16", "f32"};  // scales: every one FLAG has
-  a.add_to(cmd, {Axis::precisions, Axis::scales}, {Axis::resolutions, Axis::sizes});
+  a.add_to(cmd, {Axis::precisions, Axis::scales}, {Axis::resolutions, Axis::sizes, Axis::apertures});
   const Method& flag = find_method("flag");
   a.option(Axis::precisions)->check(CLI::IsMember(flag.precisions));
   a.option(Axis::scales)->check(CLI::IsMember(flag.buffer_scales));

@@ -73,7 +73,7 @@ const std::vector<std::string>& flag_horizontal_blocks() {
 // at 324 (N = 161, block 4) and 202 (N = 201, block 2); the bracket pass of the bracketed precisions
 // (four arrays of ceil(N/2) entries) fails at 41 layers (N = 81) and works at 31. On lavapipe, auto
 // takes the largest block within the bound and a configuration beyond either bound is refused.
-constexpr int kSoftwareMaxBlockLayers = 324, kSoftwareMaxBracketedLayers = 31;
+constexpr int kSoftwareMaxBlockLayers = kFlagSoftwareMaxBlockLayers, kSoftwareMaxBracketedLayers = 31;
 
 int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& device, int layers) {
   if (requested) return *requested;
@@ -169,15 +169,16 @@ namespace {
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
 constexpr std::int32_t kBracketChunk = 32;  // pixels per invocation of flag_bracket.comp
 
+}  // namespace
 
-// The unsigned formats cannot hold negative layer values: check the uploaded colour once, with the
-// CPU reference's message.
-void check_colour(GpuFrame& frame, LayerPrecision precision) {
+void check_frame_colour(GpuFrame& frame, LayerPrecision precision) {
   if (!is_unsigned(precision)) return;
   Image rgba(frame.params.width_px, frame.params.height_px, 4);
   vk::download(frame.ctx, frame.color, rgba.pixels.data(), rgba.pixels.size() * sizeof(float));
   check_layer_input(rgba, precision);
 }
+
+namespace {
 
 class Flag final : public gpu::GpuFilter {
  public:
@@ -192,7 +193,7 @@ class Flag final : public gpu::GpuFilter {
         tile_px_(config.adaptive ? config.adaptive_tile_px : 0),
         streamed_(config.streamed),
         layer_count_(pattern_.layers()) {
-    check_colour(frame, config.precision);
+    check_frame_colour(frame, config.precision);
     const vk::Buffer* flag_input = &frame.packed;
     const vk::Buffer* flag_output = &frame.output;
     if (scale_ > 1) {
@@ -427,6 +428,7 @@ class Flag final : public gpu::GpuFilter {
 }  // namespace
 
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options) {
+  if (!options.aperture.is_disc()) return make_flag_shape_gpu(frame, flag_config(options), options.aperture);
   return std::make_unique<Flag>(frame, flag_config(options));
 }
 

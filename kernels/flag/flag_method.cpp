@@ -3,6 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "ceil_div.hpp"
 #include "coc_tiles_gpu.hpp"
@@ -11,6 +16,7 @@
 #include "flag_gpu.hpp"
 #include "flag_memory.hpp"
 #include "flag_reduced.hpp"
+#include "flag_shape.hpp"
 #include "flag_tiles.hpp"
 #include "method.hpp"
 #include "vk/memory.hpp"
@@ -146,6 +152,52 @@ Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
   return s == 1 ? blurred : flag_upsample(blurred, in.color, in.radius_px, s);
 }
 
+// A non-disc aperture (flag_shape.hpp): the layers (N unless the shape is mirror-symmetric; streamed:
+// the ring's rows) as the driver allocates them, the shape-weighted input (vec4 a pixel), naive's
+// sorted gauges and the chord table.
+MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, int w, int h, vk::Context* ctx) {
+  const int layer_count = flag_aperture_layers(aperture, c.pattern);
+  // Streamed: the ring as the GPU driver sizes it; no device: lavapipe's choice.
+  const FlagStreamRing ring = flag_shape_layer_rows(c, layer_count, w, h, ctx ? ctx->info().is_software() : true);
+  const FlagBufferExtent& e = ring.extent;
+  MemoryUse use;
+  const std::uint64_t texels = e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
+  std::uint64_t layers = texels;
+  if (ctx) {
+    layers = vk::image_3d_requirement_bytes(*ctx, layer_format(c.precision), e.width, e.height, e.layers);
+    use.from_driver = true;
+  }
+  const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
+                      tables = c.pattern.samples_per_pixel() * sizeof(float) + FlagShapeTable::bytes_for(c.pattern);
+  use.bytes = layers + weighted + tables;
+  use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
+                 {"bytes_per_texel", bytes_per_texel(c.precision)},
+                 {"layer_buffer_bytes", layers},
+                 {"texel_bytes", texels},
+                 {"aperture", aperture.name()},
+                 {"layer_halves", layer_count == c.pattern.layers() ? 1 : 2},
+                 {"paper_convention_bytes", static_cast<double>(texels)},
+                 {"other_bytes", weighted + tables}};
+  if (c.streamed) use.details["streamed"] = {{"band_rows", ring.band_rows}, {"ring_rows", e.height}};
+  return use;
+}
+
+// Why FLAG cannot draw a non-disc aperture with these options ("" when it can): the per-value
+// precisions at full resolution with indexed or masked bins, adaptive off, full or streamed layers.
+std::string flag_shape_unsupported(const FilterOptions& o) {
+  if (o.aperture.is_disc()) return "";
+  const FlagConfig c = flag_config(o);
+  std::vector<std::string> why;
+  if (is_bracketed(c.precision)) why.push_back("precision " + o.precision);
+  if (c.buffer_scale != 1) why.push_back(fmt::format("buffer scale {}", c.buffer_scale));
+  if (c.adaptive) why.push_back("adaptive = on");
+  if (c.horizontal_bins == FlagHorizontalBins::scan) why.push_back("horizontal_bins = scan");
+  if (why.empty()) return "";
+  return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, indexed or masked bins, buffer "
+                     "scale 1 and adaptive off (full or streamed layers), not with {}",
+                     o.aperture.name(), fmt::join(why, ", "));
+}
+
 }  // namespace
 
 void declare_flag(std::vector<Method>& methods) {
@@ -196,8 +248,13 @@ void declare_flag(std::vector<Method>& methods) {
     needs.subgroup_arithmetic = c.adaptive;  // the tile map's bound is shared across a subgroup
     return needs;
   };
+  // Any convex aperture by per-layer chord extents (flag_shape.hpp); flag_shape_unsupported says with what.
+  m.aperture_unsupported = flag_shape_unsupported;
   m.cpu_reference = [](const CpuInput& in) {
     const FlagConfig c = flag_config(in.options);
+    if (!in.options.aperture.is_disc())
+      return flag_shape_blur(in.color, in.radius_px, FlagShapeTable(in.options.aperture, c.pattern), c.pattern,
+                             c.precision, in.threads);
     if (c.adaptive) return flag_adaptive_cpu(in, c);
     if (c.buffer_scale != 1)
       return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);
@@ -206,12 +263,30 @@ void declare_flag(std::vector<Method>& methods) {
     return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
   m.make_gpu = make_flag_gpu;
-  m.work = [](const FilterOptions& o, int w, int h) { return flag_work(flag_config(o), w, h); };
+  m.work = [](const FilterOptions& o, int w, int h) {
+    const FlagConfig c = flag_config(o);
+    if (o.aperture.is_disc()) return flag_work(c, w, h);
+    // A shape: the weights (colour and radius in, a search in the sorted gauges), then both passes
+    // over N row / column samples, through N layers unless the shape is mirror-symmetric.
+    const double pixels = static_cast<double>(w) * h;
+    const double layer_bytes = pixels * flag_aperture_layers(o.aperture, c.pattern) * bytes_per_texel(c.precision);
+    std::vector<PassWork> work = {{"shape_pack", pixels, pixels * 32, pixels * 16}};
+    if (c.streamed)  // both passes band by band under one timestamp (flag_work)
+      work.push_back({"streamed", 2 * pixels * c.pattern.size_n, pixels * 16 + layer_bytes, layer_bytes + pixels * 16});
+    else
+      work.insert(work.end(), {{"horizontal", pixels * c.pattern.size_n, pixels * 16, layer_bytes},
+                               {"vertical", pixels * c.pattern.size_n, layer_bytes, pixels * 16}});
+    return work;
+  };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
+    if (!o.aperture.is_disc()) return flag_shape_gpu_memory(flag_config(o), o.aperture, w, h, ctx);
     return flag_gpu_memory(flag_config(o), w, h, ctx);
   };
   m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
+    if (!o.aperture.is_disc()) {  // the packed input (4 floats a pixel) and the whole 3D buffer in f32
+      return static_cast<std::uint64_t>(w) * h * (16 + flag_aperture_layers(o.aperture, c.pattern) * std::uint64_t{12});
+    }
     if (const int band = cpu_band_rows(c, w, h); band > 0)
       return flag_streamed_cpu_bytes(w, h, c.pattern, band, default_cpu_threads());
     const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);

@@ -11,6 +11,9 @@
 #include "layer_rows.glsl"
 
 layout(constant_id = 0) const int LAYERS = 21;
+// Any aperture that is not mirror-symmetric (kernels/flag/flag_shape.hpp): N layers z = dz + n, and
+// row y + j k holds the sources whose chord covers dz = -j: layer n - j. Else layer |j|.
+layout(constant_id = 8) const bool BOTH_HALVES = false;
 
 layout(binding = 0, LAYER_FORMAT) uniform readonly image3D layers;
 layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
@@ -58,7 +61,7 @@ void main() {
 #endif
     const int sy = p.y + j * k;
     if (sy < 0 || sy >= params.height_px) continue;
-    const vec3 q = imageLoad(layers, ivec3(p.x, layer_row(sy), abs(j))).rgb;
+    const vec3 q = imageLoad(layers, ivec3(p.x, layer_row(sy), BOTH_HALVES ? n - j : abs(j))).rgb;
 #if BRACKETED
     const uint i = uint(sy * LAYERS + abs(j));
     const vec3 offset = uintBitsToFloat(bracket_bits[i].rgb);

@@ -1,0 +1,78 @@
+#pragma once
+// FLAG for any convex aperture (issue 23): per-layer chord extents of the shape. A row sample at
+// column offset i k with radius r covers the rows dz k of its shape's vertical chord at x = i k,
+// dz in [lo, hi] (an interval: the shape is convex; it need not hold dz = 0, e.g. a pentagon pointing
+// up). The horizontal pass bins it as a difference along the layers, +colour at the chord's far end
+// hi and -colour just past its near end lo - 1, and accumulates from the outermost layer inwards as
+// the disc's FLAG does, so layer dz holds exactly the samples whose chord covers dz: O(N) per pixel.
+//
+// Layers: a shape unchanged by the mirror y -> -y (Aperture::vertically_symmetric, and its float
+// lattice mirror-exact) has chords [-h, h]: one half, (N + 1) / 2 layers z = |dz| as for the disc
+// (paper 3.2.2: halved memory), binned at h alone. Any other shape keeps both halves, N layers
+// z = dz + n, and the vertical pass reads layer n - j for row y + j k (the source j rows below the
+// pixel covers it when its chord holds dz = -j).
+//
+// Which offsets are inside is naive's shape test (naive_shape.hpp): the chords come from the same
+// float gauges (ShapeLattice), so FLAG and naive-shape draw the same offsets, and weights are colour /
+// area with area = the pattern offsets inside the shape of that radius (ShapeLattice::area).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "aperture.hpp"
+#include "flag.hpp"
+#include "gather_pattern.hpp"
+#include "image.hpp"
+#include "naive_shape.hpp"
+#include "parallel.hpp"
+
+namespace bokeh {
+
+// The chord table. A source's shape is the first m offsets of the lattice in ascending gauge, where
+// m = ShapeLattice::area(r): m is also its area. chords[column * (side^2 + 1) + m] is the chord of
+// lattice column `column` (offset from source to pixel (column - n) k) for area m, packed as
+// (hi + n + 1) << 16 | (lo + n), 0 when the column is outside the shape (lo = -n > hi = -n - 1).
+// One load per sample and output column on the GPU: a search in per-column monotone tables would
+// cost log2(N) loads instead, each of which lavapipe turns into 8 scalar loads in the horizontal
+// pass's non-uniform control flow; the table is side x (side^2 + 1) ints (276 KiB at N = 41).
+struct FlagShapeTable {
+  FlagShapeTable(const Aperture& aperture, const GatherPattern& pattern);
+  ShapeLattice lattice;  // naive's gauges: area and shape test
+  int half_n = 0, side = 1;
+  bool halved = false;  // one half of the layers: the lattice is mirror-exact (see above)
+  std::vector<std::int32_t> chords;
+  int layers() const { return halved ? half_n + 1 : side; }
+  std::int32_t chord(int column, int area) const {
+    return chords[static_cast<std::size_t>(column) * (static_cast<std::size_t>(side) * side + 1) + area];
+  }
+  std::uint64_t bytes() const { return chords.size() * sizeof(std::int32_t); }
+  // bytes() of any aperture's table on this pattern, without building it.
+  static std::uint64_t bytes_for(const GatherPattern& pattern);
+};
+
+// Whether FLAG keeps one half of the layers for this aperture: vertically symmetric and its float
+// lattice mirror-exact (FlagShapeTable::halved).
+bool flag_layers_halved(const Aperture& aperture, const ShapeLattice& lattice);
+// Layers FLAG stores for this aperture: (N + 1) / 2 for the disc and mirror-symmetric shapes, N for
+// the others (FlagShapeTable::layers()), from the lattice alone (no chord table).
+int flag_aperture_layers(const Aperture& aperture, const GatherPattern& pattern);
+
+// Colour / area (ShapeLattice::area of the radius) and the area as a float: the horizontal pass's
+// input, what shaders/flag/shape_pack.comp writes. color: >= 3 channels; radius_px: 1 channel.
+Image flag_shape_pack(const Image& color, const Image& radius_px, const FlagShapeTable& table,
+                      int threads = default_cpu_threads());
+// The horizontal pass into table.layers() layers (z = |dz| halved, dz + n otherwise), each value
+// rounded as `precision` stores it (per-value precisions only: throws std::invalid_argument for the
+// bracketed ones). Per pixel, samples left to right, each +colour at its chord's far end and
+// -colour past its near end, then accumulated from the top layer down (shaders/flag/horizontal_shape.comp).
+FlagLayers flag_shape_horizontal(const Image& packed, const FlagShapeTable& table, const GatherPattern& pattern,
+                                 LayerPrecision precision, int threads = default_cpu_threads());
+// The vertical pass: per pixel, rows y + j k, j = -n .. n, layer |j| (halved) or n - j.
+Image flag_shape_vertical(const FlagLayers& layers, const FlagShapeTable& table, const GatherPattern& pattern,
+                          int threads = default_cpu_threads());
+// The whole blur: pack, horizontal, vertical. Throws std::invalid_argument for negative colours in an
+// unsigned precision and for bracketed precisions.
+Image flag_shape_blur(const Image& color, const Image& radius_px, const FlagShapeTable& table,
+                      const GatherPattern& pattern, LayerPrecision precision, int threads = default_cpu_threads());
+
+}  // namespace bokeh

@@ -1,0 +1,152 @@
+// GPU FLAG for any convex aperture (flag_shape.hpp): shape_pack (colour / area and the area, per
+// pixel), horizontal_shape (chord extents into a 3D image of (N + 1) / 2 or N layers), vertical.
+// layer_buffer = streamed (flag_gpu.hpp): the layers in a ring of B + 2 n k rows, the two passes
+// alternating per band, as the disc's FLAG does (the full buffer's image bit for bit). f32 / f16 /
+// r11g11b10f, indexed or masked bins, scale 1, adaptive off (flag_method.cpp's aperture_unsupported refuses the
+// others before this is made).
+#include <algorithm>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "ceil_div.hpp"
+#include "flag_config.hpp"
+#include "flag_gpu.hpp"
+#include "flag_shape.hpp"
+#include "vk/spirv.hpp"
+
+namespace bokeh {
+
+namespace {
+
+constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+
+// The shapes' binning: indexed or masked as chosen; auto as for the disc (masked on lavapipe up to 21
+// layers), except that where the disc's auto takes the scan, which shapes do not have, indexed.
+FlagHorizontalBins shape_binning(const FlagConfig& c, const vk::DeviceInfo& device, int layers) {
+  const FlagHorizontalBins bins = flag_horizontal_binning(c.horizontal_bins, device, layers);
+  return bins == FlagHorizontalBins::scan ? FlagHorizontalBins::indexed : bins;
+}
+
+class FlagShape final : public gpu::GpuFilter {
+ public:
+  FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture)
+      : frame_(frame),
+        table_(aperture, config.pattern),
+        outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
+        sorted_(vk::make_storage_buffer(frame.ctx, table_.lattice.sorted.size() * sizeof(float), "sorted aperture gauges")),
+        chords_(vk::make_storage_buffer(frame.ctx, table_.bytes(), "FLAG chord table")),
+        weighted_(vk::make_storage_buffer(frame.ctx, static_cast<VkDeviceSize>(frame.width()) * frame.height() * 16,
+                                          "FLAG shape-weighted colour")),
+        rows_(flag_shape_layer_rows(config, table_.layers(), frame.width(), frame.height(),
+                                    frame.ctx.info().is_software())),
+        streamed_(config.streamed),
+        layers_(frame.ctx, layer_format(config.precision), static_cast<std::uint32_t>(frame.width()),
+                static_cast<std::uint32_t>(rows_.extent.height), static_cast<std::uint32_t>(table_.layers())),
+        pack_(frame.ctx, vk::spirv("flag/shape_pack"), std::vector<VkDescriptorType>(4, kBuffer),
+              sizeof(gpu::PassParams)),
+        // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 7 LAYER_ROWS (0: the full
+        // buffer), 8 BOTH_HALVES.
+        horizontal_(frame.ctx, vk::spirv("flag/horizontal_shape_" + std::string(to_string(config.precision))),
+                    std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}, sizeof(gpu::PassParams),
+                    std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, outputs_, 0,
+                                              shape_binning(config, frame.ctx.info(), table_.layers()) ==
+                                                  FlagHorizontalBins::masked,
+                                              0, layer_ring_rows(), !table_.halved}),
+        vertical_(frame.ctx, vk::spirv("flag/vertical_" + std::string(to_string(config.precision))),
+                  std::vector<VkDescriptorType>{kImage, kBuffer}, sizeof(gpu::PassParams),
+                  std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(), !table_.halved}) {
+    if (is_bracketed(config.precision) || config.buffer_scale != 1 || config.adaptive)
+      throw std::logic_error("make_flag_shape_gpu: a configuration aperture_unsupported refuses");
+    check_frame_colour(frame, config.precision);
+    if (frame.ctx.info().is_software() && outputs_ * table_.layers() > kFlagSoftwareMaxBlockLayers)
+      throw std::invalid_argument(fmt::format(
+          "FLAG on {}: horizontal block {} x {} layers, over the {} bins this driver computes correctly; use "
+          "--horizontal-block auto or a smaller N", frame.ctx.info().name, outputs_, table_.layers(),
+          kFlagSoftwareMaxBlockLayers));
+    vk::upload(frame.ctx, sorted_, table_.lattice.sorted.data(), table_.lattice.sorted.size() * sizeof(float));
+    vk::upload(frame.ctx, chords_, table_.chords.data(), table_.bytes());
+    pack_.bind(0, frame.packed);
+    pack_.bind(1, frame.color);
+    pack_.bind(2, sorted_);
+    pack_.bind(3, weighted_);
+    horizontal_.bind(0, weighted_);
+    horizontal_.bind(1, layers_);
+    horizontal_.bind(2, chords_);
+    vertical_.bind(0, layers_);
+    vertical_.bind(1, frame.output);
+  }
+
+  void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
+    gpu::PassParams params = frame_.params;  // a warm-up's region or the frame's
+    params.band_y0_px = 0, params.band_y1_px = params.height_px;
+    const auto w = static_cast<std::uint32_t>(params.width_px), h = static_cast<std::uint32_t>(params.height_px);
+    const auto k = static_cast<std::uint32_t>(params.spacing_px);
+    pack_.dispatch(cmd, &params, w, h);
+    timer.end_pass(cmd, "shape_pack");
+    const std::uint32_t horizontal_x = ceil_div(w, static_cast<std::uint32_t>(outputs_) * k) * k;
+    if (!streamed_) {
+      horizontal_.dispatch(cmd, &params, horizontal_x, h);
+      timer.end_pass(cmd, "horizontal");
+      vertical_.dispatch(cmd, &params, w, h);
+      timer.end_pass(cmd, "vertical");
+      return;
+    }
+    // Streamed, as the disc's FLAG (flag_gpu.cpp): per band, the horizontal pass fills the ring up to
+    // the band's last row + n k, then the vertical pass sums the band; dispatch() ends each with a
+    // barrier. One timestamp for the whole.
+    const int reach_rows = params.half_n * params.spacing_px, height = params.height_px;
+    int written = 0;  // rows of layers written so far
+    for (int y0 = 0; y0 < height; y0 += rows_.band_rows) {
+      const int y1 = std::min(height, y0 + rows_.band_rows), needed = std::min(height, y1 + reach_rows);
+      gpu::PassParams band = params;
+      if (needed > written) {
+        band.band_y0_px = written, band.band_y1_px = needed;
+        horizontal_.dispatch(cmd, &band, horizontal_x, static_cast<std::uint32_t>(needed - written));
+        written = needed;
+      }
+      band.band_y0_px = y0, band.band_y1_px = y1;
+      vertical_.dispatch(cmd, &band, w, static_cast<std::uint32_t>(y1 - y0));
+    }
+    timer.end_pass(cmd, "streamed");
+  }
+
+  std::uint64_t intermediate_bytes() const override {
+    return layers_.allocated_bytes() + weighted_.allocated_bytes() + sorted_.allocated_bytes() +
+           chords_.allocated_bytes();
+  }
+
+ private:
+  gpu::GpuFrame& frame_;
+  FlagShapeTable table_;
+  // LAYER_ROWS (shaders/flag/layer_rows.glsl): the ring's rows, or 0 for the full buffer.
+  std::int32_t layer_ring_rows() const { return streamed_ ? rows_.extent.height : 0; }
+
+  std::int32_t outputs_;  // pixels per invocation of the horizontal pass
+  vk::Buffer sorted_, chords_, weighted_;
+  FlagStreamRing rows_;   // the layer image's extent (streamed: the ring's) and band (0: full)
+  bool streamed_;
+  vk::StorageImage3D layers_;
+  vk::ComputePipeline pack_, horizontal_, vertical_;
+};
+
+}  // namespace
+
+FlagStreamRing flag_shape_layer_rows(const FlagConfig& c, int layers, int width_px, int height_px,
+                                     bool software_device) {
+  FlagStreamRing ring{0, {width_px, height_px, layers}};
+  if (!c.streamed) return ring;
+  // The vertical pass reads rows y - n k .. y + n k whatever the layers hold (both halves or one).
+  const int reach_rows = c.pattern.half() * c.pattern.spacing_px;
+  const std::uint64_t row_bytes = static_cast<std::uint64_t>(width_px) * layers * bytes_per_texel(c.precision);
+  ring.band_rows = flag_stream_band_rows(c.band_rows, software_device, reach_rows, row_bytes);
+  ring.extent.height = flag_stream_ring_rows(ring.band_rows, reach_rows, height_px);
+  return ring;
+}
+
+std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
+                                                    const Aperture& aperture) {
+  return std::make_unique<FlagShape>(frame, config, aperture);
+}
+
+}  // namespace bokeh

@@ -1,0 +1,272 @@
+// FLAG for any convex aperture (kernels/flag/flag_shape.hpp, issue 23) against independent truth:
+// naive's direct shape test per sample (naive_shape_gather), the light every source conserves, its
+// own CPU reference on the GPU, and the driver's allocation against the memory model.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <tuple>
+#include <utility>
+
+#include "aperture.hpp"
+#include "flag.hpp"
+#include "flag_gpu.hpp"
+#include "flag_shape.hpp"
+#include "gpu_test_support.hpp"
+#include "method.hpp"
+#include "naive_shape.hpp"
+#include "run.hpp"
+#include "scene.hpp"
+#include "vk/memory.hpp"
+
+namespace bokeh {
+namespace {
+
+using test::context;
+
+// Every shape issue 23 names, with whether FLAG keeps one half of its layers (mirror-symmetric).
+struct Shape {
+  const char* name;
+  bool halved;
+};
+constexpr Shape kShapes[] = {{"disc", true},          {"blades5", false},        {"blades5-rot90", true},
+                             {"blades6", true},       {"blades7-rot15", false},  {"blades9", false},
+                             {"blades6-curv0.5", true}, {"blades7-rot20-curv0.5", false}};
+
+// Random colours and radii over the whole pattern (every area the lattice has, near enough), and a
+// black border of `border` px (0: none).
+void random_frame(int w, int h, float max_radius_px, unsigned seed, int border, Image& color, Image& radius) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  color = Image(w, h, 3);
+  radius = Image(w, h, 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      *radius.px(x, y) = unit(rng) * max_radius_px;
+      const bool inside = x >= border && y >= border && x < w - border && y < h - border;
+      for (int c = 0; c < 3; ++c) color.px(x, y)[c] = inside ? unit(rng) * (c == 0 && x % 7 == 0 ? 20.0f : 1.0f) : 0.0f;
+    }
+}
+
+double largest(const Image& image) {
+  double m = 0;
+  for (float v : image.pixels) m = std::max(m, static_cast<double>(std::abs(v)));
+  return m;
+}
+
+// FLAG by chords against naive's shape test on the same float gauges, every shape, f32 and the
+// per-value formats: each output sums non-negative layer values (N of them at most) whose own
+// rounding is at most 2^-11 (f16) or 2^-6 (r11g11b10f blue) of themselves, so |FLAG - naive| <= that
+// fraction of naive's output, plus f32 summation order (the difference bins subtract what they add).
+TEST(FlagShape, MatchesNaiveShapeGatherForEveryShape) {
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}}) {
+    Image color, radius;
+    random_frame(53, 41, pattern.max_radius_px(), 7u + pattern.size_n, 0, color, radius);
+    for (const Shape& shape : kShapes) {
+      SCOPED_TRACE(std::string(shape.name) + " N " + std::to_string(pattern.size_n));
+      const Aperture aperture = parse_aperture(shape.name);
+      const FlagShapeTable table(aperture, pattern);
+      EXPECT_EQ(table.halved, shape.halved);
+      EXPECT_EQ(table.layers(), shape.halved ? pattern.layers() : pattern.size_n);
+      EXPECT_EQ(flag_aperture_layers(aperture, pattern), table.layers());
+      EXPECT_EQ(FlagShapeTable::bytes_for(pattern), table.bytes());
+      const Image naive = naive_shape_gather(color, radius, ShapeLattice(aperture, pattern), pattern, 2);
+      const double top = largest(naive);
+      for (const auto& [precision, relative] : {std::pair{LayerPrecision::f32, 0.0},
+                                                std::pair{LayerPrecision::f16, std::ldexp(1.0, -11)},
+                                                std::pair{LayerPrecision::r11g11b10f, std::ldexp(1.0, -6)}}) {
+        const Image flag = flag_shape_blur(color, radius, table, pattern, precision, 2);
+        for (std::size_t i = 0; i < naive.pixels.size(); ++i)
+          ASSERT_NEAR(flag.pixels[i], naive.pixels[i], relative * naive.pixels[i] + 2e-6 * top)
+              << to_string(precision) << " value " << i;
+      }
+    }
+  }
+}
+
+// A pentagon pointing up (blades5): a light spreads up to its vertex and not as far down; the chord
+// of the centre column is [-r, r cos 36] in rows, so it misses dz = 0 for no radius but is asymmetric.
+TEST(FlagShape, PentagonPointingUpReachesFurtherUpThanDown) {
+  const GatherPattern pattern{15, 1};
+  Image color(31, 31, 3), radius(31, 31, 1, 6.5f);
+  color.px(15, 15)[1] = 1.0f;
+  const Image out = flag_shape_blur(color, radius, FlagShapeTable(parse_aperture("blades5"), pattern), pattern,
+                                    LayerPrecision::f32, 1);
+  EXPECT_GT(out.px(15, 15 - 6)[1], 0.0f);   // the vertex: 6.5 px up
+  EXPECT_EQ(out.px(15, 15 + 6)[1], 0.0f);   // the flat edge: 6.5 cos 36 = 5.26 px down
+  EXPECT_GT(out.px(15, 15 + 5)[1], 0.0f);
+}
+
+// Energy: away from the border every source's weights sum to one, so a dark-bordered frame's output
+// sums to its input, for every shape (f32 layers).
+TEST(FlagShape, ConservesEnergyForEveryShape) {
+  const GatherPattern pattern{11, 2};
+  Image color, radius;
+  random_frame(48, 44, pattern.max_radius_px(), 3u, pattern.half() * pattern.spacing_px, color, radius);
+  double input = 0;
+  for (int y = 0; y < color.height; ++y)
+    for (int x = 0; x < color.width; ++x) input += color.px(x, y)[0] + color.px(x, y)[1] + color.px(x, y)[2];
+  for (const Shape& shape : kShapes) {
+    const Image out = flag_shape_blur(color, radius, FlagShapeTable(parse_aperture(shape.name), pattern), pattern,
+                                      LayerPrecision::f32, 2);
+    double output = 0;
+    for (float v : out.pixels) output += v;
+    EXPECT_NEAR(output, input, 1e-5 * input) << shape.name;
+  }
+}
+
+// The full and the streamed buffer draw every shape; the other paths say why not, naming the option.
+TEST(FlagShape, DeclaresItsScope) {
+  const Method& flag = find_method("flag");
+  FilterOptions o = flag.defaults({9, 2});
+  o.aperture = parse_aperture("blades5");
+  EXPECT_EQ(aperture_unsupported(flag, o), "");
+  FilterOptions streamed = o, masked = o;
+  streamed.values["layer_buffer"] = 1;
+  masked.values["horizontal_bins"] = 2;
+  EXPECT_EQ(aperture_unsupported(flag, streamed), "");
+  EXPECT_EQ(aperture_unsupported(flag, masked), "");
+  for (const auto& [key, value, words] : {std::tuple{"adaptive", 1.0, "adaptive = on"},
+                                          std::tuple{"horizontal_bins", 3.0, "horizontal_bins = scan"}}) {
+    FilterOptions v = o;
+    v.values[key] = value;
+    EXPECT_NE(aperture_unsupported(flag, v).find(words), std::string::npos) << aperture_unsupported(flag, v);
+  }
+  FilterOptions bracketed = o, reduced = o;
+  bracketed.precision = "unorm10_bracketed";
+  reduced.buffer_scale = 2;
+  EXPECT_NE(aperture_unsupported(flag, bracketed).find("precision unorm10_bracketed"), std::string::npos);
+  EXPECT_NE(aperture_unsupported(flag, reduced).find("buffer scale 2"), std::string::npos);
+}
+
+// The memory model: both halves for the asymmetric pentagon, one for the hexagon (1080p, N = 41, f16),
+// and the bytes the GPU driver allocates for a shape equal the model's (as the disc's do).
+TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
+  const Method& flag = find_method("flag");
+  FilterOptions hexagon = flag.defaults({41, 1}), pentagon = hexagon;
+  hexagon.aperture = parse_aperture("blades6");
+  pentagon.aperture = parse_aperture("blades5");
+  const std::uint64_t texels = 1920ull * 1080 * 8;
+  EXPECT_EQ(flag.gpu_memory(hexagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 21);
+  EXPECT_EQ(flag.gpu_memory(pentagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 41);
+  EXPECT_EQ(flag.gpu_memory(flag.defaults({41, 1}), 1920, 1080, nullptr).details["texel_bytes"], texels * 21);
+
+  const Scene s = make_scene("hoops", 61, 45);
+  for (const char* name : {"blades5", "blades6"}) {
+    FilterOptions o = flag.defaults({9, 2});
+    o.aperture = parse_aperture(name);
+    Lens lens = s.lens;
+    lens.aperture = o.aperture;
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, o.pattern);
+    const auto filter = flag.make_gpu(frame, o);
+    const MemoryUse model = flag.gpu_memory(o, 61, 45, &context());
+    EXPECT_TRUE(model.from_driver);
+    EXPECT_EQ(model.details["layer_buffer_bytes"].get<std::uint64_t>(),
+              vk::image_3d_requirement_bytes(context(), layer_format(LayerPrecision::f16), 61, 45,
+                                             std::string(name) == "blades5" ? 9 : 5));
+    // Buffers are sub-allocated at the device's alignment: within a few hundred bytes each.
+    EXPECT_GE(filter->intermediate_bytes(), model.bytes) << name;
+    EXPECT_LE(filter->intermediate_bytes(), model.bytes + 3 * 256) << name;
+  }
+}
+
+// The GPU against the CPU reference, every per-value precision and horizontal block, asymmetric,
+// symmetric and curved shapes, within the method's declared bound.
+TEST(FlagShape, GpuMatchesCpuReference) {
+  const Method& flag = find_method("flag");
+  const Scene s = make_scene("hoops", 63, 46);
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}})
+    for (const char* name : {"blades5", "blades6", "blades7-rot15-curv0.3"})
+      for (const char* precision : {"f32", "f16", "r11g11b10f"})
+        for (double block : {0.0, 1.0}) {  // auto (4 on lavapipe), 1 (f32 only: the same layers either way)
+          if (block == 1.0 && std::string(precision) != "f32") continue;
+          SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n));
+          FilterOptions o = flag.defaults(pattern);
+          o.precision = precision;
+          o.aperture = parse_aperture(name);
+          o.values["horizontal_block"] = block;
+          Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+          lens.aperture = o.aperture;
+          const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, o, 2);
+          std::vector<vk::PassTime> passes;
+          const Image gpu = run_gpu(context(), flag, s.color, s.depth_m, lens, o, &passes);
+          ASSERT_EQ(passes.size(), 4u);
+          EXPECT_EQ(passes[1].pass, "shape_pack");
+          double diff = 0;
+          for (std::size_t i = 0; i < cpu.pixels.size(); ++i)
+            diff = std::max(diff, static_cast<double>(std::abs(gpu.pixels[i] - cpu.pixels[i])));
+          EXPECT_LE(diff / largest(cpu), flag.gpu_tolerance(o));
+        }
+}
+
+// Masked bins (a compare per bin instead of an indexed add) add the same values to the same bins: the
+// indexed bins' image bit for bit, both halves or one, every horizontal block.
+TEST(FlagShape, MaskedBinsMatchIndexedBitForBit) {
+  const Method& flag = find_method("flag");
+  const Scene s = make_scene("hoops", 61, 47);
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}})
+    for (const char* name : {"blades5", "blades6", "blades7-rot15-curv0.3"}) {
+      SCOPED_TRACE(std::string(name) + " N " + std::to_string(pattern.size_n));
+      Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+      lens.aperture = parse_aperture(name);
+      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+      vk::TimestampQueries timer(context(), 16);
+      FilterOptions o = flag.defaults(pattern);
+      o.precision = "f32";
+      o.aperture = lens.aperture;
+      o.values["horizontal_bins"] = 1;  // indexed
+      auto indexed = flag.make_gpu(frame, o);
+      gpu::run_frames(frame, *indexed, timer);
+      const Image expected = frame.read_output();
+      for (double block : {0.0, 1.0}) {
+        o.values["horizontal_bins"] = 2;  // masked
+        o.values["horizontal_block"] = block;
+        auto masked = flag.make_gpu(frame, o);
+        gpu::run_frames(frame, *masked, timer);
+        EXPECT_EQ(frame.read_output().pixels, expected.pixels) << "block " << block;
+      }
+    }
+}
+
+// Streamed layers (a ring of B + 2 n k rows, band by band) give the full buffer's image bit for bit,
+// both halves or one, in less memory; the model sizes the ring as the driver allocates it.
+TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
+  const Method& flag = find_method("flag");
+  const Scene s = make_scene("hoops", 61, 47);
+  const GatherPattern pattern{9, 2};
+  for (const char* name : {"blades5", "blades6"})
+    for (const char* precision : {"f32", "f16"}) {
+      SCOPED_TRACE(std::string(name) + " " + precision);
+      FilterOptions o = flag.defaults(pattern);
+      o.precision = precision;
+      o.aperture = parse_aperture(name);
+      Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+      lens.aperture = o.aperture;
+      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+      vk::TimestampQueries timer(context(), 16);
+      auto full = flag.make_gpu(frame, o);
+      gpu::run_frames(frame, *full, timer);
+      const Image expected = frame.read_output();
+      for (int band : {1, 5, 0}) {
+        FilterOptions streamed = o;
+        streamed.values["layer_buffer"] = 1;
+        streamed.values["band_rows"] = band;
+        auto filter = flag.make_gpu(frame, streamed);
+        const auto passes = gpu::run_frames(frame, *filter, timer);
+        EXPECT_EQ(passes.back().pass, "streamed");
+        const Image got = frame.read_output();
+        EXPECT_EQ(got.pixels, expected.pixels) << "band " << band;
+        const MemoryUse model = flag.gpu_memory(streamed, 61, 47, &context());
+        EXPECT_GE(filter->intermediate_bytes(), model.bytes) << band;
+        EXPECT_LE(filter->intermediate_bytes(), model.bytes + 3 * 256) << band;
+        if (band == 1 || band == 5) {
+          EXPECT_EQ(model.details["extent"]["height"], band + 2 * pattern.half() * pattern.spacing_px);
+          EXPECT_LT(filter->intermediate_bytes(), full->intermediate_bytes()) << band;
+        }
+      }
+    }
+}
+
+}  // namespace
+}  // namespace bokeh
