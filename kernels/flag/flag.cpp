@@ -212,7 +212,7 @@ FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& p, Lay
   return out;
 }
 
-Image flag_vertical(const FlagLayers& layers, const GatherPattern& p, int threads) {
+Image flag_vertical(const FlagLayers& layers, const GatherPattern& p, int threads, bool both_halves) {
   const int n = p.half(), k = p.spacing_px;
   Image out(layers.width, layers.height, 3);
   parallel_rows(layers.height, threads, [&](int y) {
@@ -221,7 +221,7 @@ Image flag_vertical(const FlagLayers& layers, const GatherPattern& p, int thread
       for (int j = -n; j <= n; ++j) {
         const int sy = y + j * k;
         if (sy < 0 || sy >= layers.height) continue;
-        const float* v = layers.at(x, sy, j < 0 ? -j : j);
+        const float* v = layers.at(x, sy, both_halves ? n - j : std::abs(j));
         for (int c = 0; c < 3; ++c) sum[c] += v[c];
       }
       float* o = out.px(x, y);

@@ -85,7 +85,10 @@ constexpr int kFlagScanSegment = 256;
 // flag_horizontal, in another order. Throws std::invalid_argument for bracketed precisions.
 FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                                 int segment = kFlagScanSegment, int threads = default_cpu_threads());
-Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads());
+// Per pixel, rows y + j k, j = -n .. n: layer |j| (one half: the disc, mirror-symmetric shapes) or, with
+// both_halves (shapes that are not mirror-symmetric, kernels/flag/flag_shape.hpp), layer n - j.
+Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads(),
+                    bool both_halves = false);
 // The whole FLAG blur. For the per-value precisions (f32, f16, r11g11b10f) it runs strip by strip in a
 // buffer reused across calls, vectorised, bit for bit flag_blur_reference's result (tested); the
 // bracketed precisions take flag_blur_reference (their brackets span whole rows).

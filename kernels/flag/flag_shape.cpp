@@ -128,30 +128,11 @@ FlagLayers flag_shape_horizontal(const Image& packed, const FlagShapeTable& tabl
   return out;
 }
 
-Image flag_shape_vertical(const FlagLayers& layers, const FlagShapeTable& table, const GatherPattern& p, int threads) {
-  const int n = p.half(), k = p.spacing_px;
-  Image out(layers.width, layers.height, 3);
-  parallel_rows(layers.height, threads, [&](int y) {
-    for (int x = 0; x < layers.width; ++x) {
-      float sum[3] = {0, 0, 0};
-      for (int j = -n; j <= n; ++j) {
-        const int sy = y + j * k;
-        if (sy < 0 || sy >= layers.height) continue;
-        const float* v = layers.at(x, sy, table.halved ? std::abs(j) : n - j);
-        for (int c = 0; c < 3; ++c) sum[c] += v[c];
-      }
-      float* o = out.px(x, y);
-      for (int c = 0; c < 3; ++c) o[c] = sum[c];
-    }
-  });
-  return out;
-}
-
 Image flag_shape_blur(const Image& color, const Image& radius_px, const FlagShapeTable& table,
                       const GatherPattern& pattern, LayerPrecision precision, int threads) {
   check_layer_input(color, precision);
   const Image packed = flag_shape_pack(color, radius_px, table, threads);
-  return flag_shape_vertical(flag_shape_horizontal(packed, table, pattern, precision, threads), table, pattern, threads);
+  return flag_vertical(flag_shape_horizontal(packed, table, pattern, precision, threads), pattern, threads, !table.halved);
 }
 
 }  // namespace bokeh

@@ -67,9 +67,7 @@ Image flag_shape_pack(const Image& color, const Image& radius_px, const FlagShap
 // -colour past its near end, then accumulated from the top layer down (shaders/flag/horizontal_shape.comp).
 FlagLayers flag_shape_horizontal(const Image& packed, const FlagShapeTable& table, const GatherPattern& pattern,
                                  LayerPrecision precision, int threads = default_cpu_threads());
-// The vertical pass: per pixel, rows y + j k, j = -n .. n, layer |j| (halved) or n - j.
-Image flag_shape_vertical(const FlagLayers& layers, const FlagShapeTable& table, const GatherPattern& pattern,
-                          int threads = default_cpu_threads());
+// The vertical pass is flag_vertical(layers, pattern, threads, !table.halved).
 // The whole blur: pack, horizontal, vertical. Throws std::invalid_argument for negative colours in an
 // unsigned precision and for bracketed precisions.
 Image flag_shape_blur(const Image& color, const Image& radius_px, const FlagShapeTable& table,
