@@ -327,6 +327,23 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     const bool everyone_has_min = std::all_of(active.begin(), active.end(), [&](std::size_t i) {
       return static_cast<int>(record.points[i].samples.size()) >= policy.min_samples;
     });
+    if (everyone_has_min && hooks.points_needed && !active.empty()) {
+      const std::vector<bool> needed = hooks.points_needed(record);
+      std::vector<std::size_t> kept;
+      for (std::size_t i : active) {
+        if (i < needed.size() && !needed[i]) {
+          record.points[i].settled = true;
+          drop(i);
+        } else {
+          kept.push_back(i);
+        }
+      }
+      active = std::move(kept);
+      if (active.empty()) {
+        record.stop_reason = "headlines settled";
+        break;
+      }
+    }
     if (active.empty()) {
       record.stop_reason = by_headlines ? "max_samples reached" : "every point settled";
     } else if (by_headlines && everyone_has_min && hooks.headlines_settled(record)) {

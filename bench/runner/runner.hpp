@@ -121,6 +121,10 @@ struct Hooks {
   // drawn from several points needs them all in the same rounds; max_samples and the budget still
   // end the run.
   std::function<bool(const RunRecord& record)> headlines_settled;
+  // After every round once every active point has min_samples: needed[i] false takes point i out of
+  // the rounds (settled): every figure it feeds is as tight as asked, so later rounds spend their time
+  // on the figures still too wide. Empty: points leave only as above.
+  std::function<std::vector<bool>(const RunRecord& record)> points_needed;
 };
 
 // Warms `target` up as the rounds do (its own warm-up, a pilot frame, then batches as long as a

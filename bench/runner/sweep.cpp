@@ -602,6 +602,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     for (const auto& p : points) hooks.visit_block.push_back(blocks.emplace(s.visit_block(p), blocks.size()).first->second);
   }
   hooks.headlines_settled = s.headlines_settled;
+  hooks.points_needed = s.points_needed;
 
   fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),
              measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),

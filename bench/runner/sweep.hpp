@@ -114,6 +114,8 @@ struct SweepSettings {
   // Ends the rounds once the command's headline figures are as tight as it asked
   // (runner::Hooks::headlines_settled).
   std::function<bool(const runner::RunRecord&)> headlines_settled;
+  // Which points a figure still too wide needs (runner::Hooks::points_needed); empty: all of them.
+  std::function<std::vector<bool>(const runner::RunRecord&)> points_needed;
   // Adds the command's derived results (fits, ratios, Pareto front) to the document.
   std::function<void(nlohmann::json& doc)> derive;
   // Prints the command's summary from the finished document.

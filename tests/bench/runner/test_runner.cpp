@@ -58,6 +58,7 @@ struct Harness {
   std::vector<std::size_t> visit_group;                      // runner::Hooks::visit_group
   std::vector<std::size_t> visit_block;                      // runner::Hooks::visit_block
   std::function<bool(const RunRecord&)> headlines_settled;   // runner::Hooks::headlines_settled
+  std::function<std::vector<bool>(const RunRecord&)> points_needed;  // runner::Hooks::points_needed
 
   RunRecord run(const std::vector<double>& times, const Policy& policy, const std::vector<std::string>& skip = {},
                 std::function<void(const RunRecord&)> checkpoint = {}) {
@@ -77,6 +78,7 @@ struct Harness {
     hooks.visit_group = visit_group;
     hooks.visit_block = visit_block;
     hooks.headlines_settled = headlines_settled;
+    hooks.points_needed = points_needed;
     return runner::run(names, skip, policy, hooks);
   }
 };
@@ -266,6 +268,29 @@ TEST(Runner, GroupsOfABlockAreVisitedOneAfterAnother) {
   }
   EXPECT_GT(block_orders.size(), 1u) << "the blocks' order is shuffled anew each round";
   EXPECT_GT(group_orders.size(), 2u) << "the groups' order inside a block is shuffled too";
+}
+
+// A point no unsettled figure needs leaves the rounds (once every point has its minimum samples);
+// the others go on, and the run ends when none is needed.
+TEST(Runner, PointsNoFigureNeedsLeaveTheRounds) {
+  Harness h;
+  h.jitter.assign(3, {0.0, 0.3});
+  h.headlines_settled = [](const RunRecord&) { return false; };
+  // Point 1 is never needed; points 0 and 2 until point 2 has 5 samples.
+  h.points_needed = [](const RunRecord& r) {
+    const bool more = r.points[2].samples.size() < 5;
+    return std::vector<bool>{more, false, more};
+  };
+  Policy p = fast_policy();
+  p.max_samples = 50;
+  const RunRecord r = h.run({1, 2, 3}, p);
+  EXPECT_EQ(r.points[1].samples.size(), static_cast<std::size_t>(p.min_samples)) << "left at its minimum";
+  EXPECT_EQ(r.points[0].samples.size(), 5u);
+  EXPECT_EQ(r.points[2].samples.size(), 5u);
+  EXPECT_TRUE(r.points[1].settled);
+  EXPECT_EQ(r.stop_reason, "headlines settled");
+  for (std::size_t round = static_cast<std::size_t>(p.min_samples); round < r.round_order.size(); ++round)
+    EXPECT_EQ(std::count(r.round_order[round].begin(), r.round_order[round].end(), 1u), 0) << "round " << round;
 }
 
 // A command whose claims are drawn from several points ends the rounds when they are tight: no point
