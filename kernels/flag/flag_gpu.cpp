@@ -146,8 +146,6 @@ FlagStreamRing flag_stream_ring(const FlagBufferExtent& full, int spacing_px, La
   return ring;
 }
 
-namespace {
-
 void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, bool bracketed) {
   if (!device.is_software()) return;
   if (block * layers > kSoftwareMaxBlockLayers)
@@ -161,8 +159,6 @@ void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, 
         "bracket pass returns NaN without an error); use f16, f32 or r11g11b10f, a buffer scale, or N <= {}",
         device.name, layers, kSoftwareMaxBracketedLayers, 2 * kSoftwareMaxBracketedLayers - 1));
 }
-
-}  // namespace
 
 namespace {
 

@@ -86,6 +86,9 @@ FlagStreamRing flag_shape_layer_rows(const FlagConfig& config, int layers, int w
 // The unsigned formats cannot hold negative layer values: checks the uploaded colour once, with the
 // CPU reference's message (check_layer_input).
 void check_frame_colour(gpu::GpuFrame& frame, LayerPrecision precision);
+// Throws std::invalid_argument on lavapipe for a horizontal block of more bins (block x layers) than it
+// computes correctly, or bracketed layers beyond what its bracket pass does; nothing on other devices.
+void check_software_bounds(const vk::DeviceInfo& device, int block, int layers, bool bracketed);
 
 VkFormat layer_format(LayerPrecision precision);  // FLAG's 3D buffer format
 // Bytes of the bracketed precisions' min/max buffer: 2 x rows x layers uvec4.

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include <fmt/format.h>
 
 #include "ceil_div.hpp"
 #include "flag_config.hpp"
@@ -59,11 +58,7 @@ class FlagShape final : public gpu::GpuFilter {
     if (is_bracketed(config.precision) || config.buffer_scale != 1 || config.adaptive)
       throw std::logic_error("make_flag_shape_gpu: a configuration aperture_unsupported refuses");
     check_frame_colour(frame, config.precision);
-    if (frame.ctx.info().is_software() && outputs_ * table_.layers() > kFlagSoftwareMaxBlockLayers)
-      throw std::invalid_argument(fmt::format(
-          "FLAG on {}: horizontal block {} x {} layers, over the {} bins this driver computes correctly; use "
-          "--horizontal-block auto or a smaller N", frame.ctx.info().name, outputs_, table_.layers(),
-          kFlagSoftwareMaxBlockLayers));
+    check_software_bounds(frame.ctx.info(), outputs_, table_.layers(), false);
     vk::upload(frame.ctx, sorted_, table_.lattice.sorted.data(), table_.lattice.sorted.size() * sizeof(float));
     vk::upload(frame.ctx, chords_, table_.chords.data(), table_.bytes());
     pack_.bind(0, frame.packed);
