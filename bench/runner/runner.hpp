@@ -123,7 +123,8 @@ struct Hooks {
   std::function<bool(const RunRecord& record)> headlines_settled;
   // After every round once every active point has min_samples: needed[i] false takes point i out of
   // the rounds (settled): every figure it feeds is as tight as asked, so later rounds spend their time
-  // on the figures still too wide. Empty: points leave only as above.
+  // on the figures still too wide; the run ends when no point is needed. As with headlines_settled,
+  // no point leaves by its own IQR. Empty: points leave only as above.
   std::function<std::vector<bool>(const RunRecord& record)> points_needed;
 };
 

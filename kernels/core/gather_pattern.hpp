@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -62,6 +63,24 @@ inline int discrete_disc_area(float radius_px, const GatherPattern& p) {
     if (z >= 0) area += 2 * z + 1;
   }
   return area;
+}
+
+// The share of the pattern's largest disc that lands inside a width x height frame, over all its
+// pixels: every gather here skips samples outside the frame, so a method whose cost is its taps does
+// this share of them. It falls as the pattern grows against the frame (800x600, k = 2: 0.90 at N = 81,
+// 0.82 at N = 153), which holds a tap-bound method's growth in N below N^2 (figure9 reports both).
+inline double disc_share_in_frame(const GatherPattern& p, int width_px, int height_px) {
+  const float max_r2 = p.max_radius_px() * p.max_radius_px();
+  double inside = 0, all = 0;  // pixel-sample pairs: (w - |dx|)+ pixels of a row see offset dx inside
+  for (int i = -p.half(); i <= p.half(); ++i) {
+    const int reach = disc_reach_layer(max_r2, i * p.spacing_px, p.spacing_px, p.half());
+    if (reach < 0) continue;
+    double column = 0;
+    for (int j = -reach; j <= reach; ++j) column += std::max(height_px - std::abs(j) * p.spacing_px, 0);
+    inside += std::max(width_px - std::abs(i) * p.spacing_px, 0) * column;
+    all += 2.0 * reach + 1;
+  }
+  return inside / (all * width_px * height_px);
 }
 
 // The disc as an integer. Squared offsets on the pattern are integers, and float(int) rounds to

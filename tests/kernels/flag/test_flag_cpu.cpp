@@ -6,6 +6,7 @@
 #include <numeric>
 #include <random>
 #include <set>
+#include <tuple>
 
 #include "coc.hpp"
 #include "flag.hpp"
@@ -71,6 +72,29 @@ TEST(DiscreteDisc, AreaTableEqualsTheCountForEveryRadiusUpToTheLargestPattern) {
   EXPECT_EQ(DiscAreaTable({201, 2}).area(1e9f), 201 * 201);
   EXPECT_EQ(DiscAreaTable({41, 2}).area(std::nanf("")), 0);  // like the count: a NaN disc holds nothing
   EXPECT_GT(checked, 400000);  // radii checked over all patterns
+}
+
+// The share of the largest disc inside the frame, against a count over every pixel and every pattern
+// offset (in_disc at the largest radius, the sample's position inside the frame): patterns smaller
+// than, as large as and larger than the frame, on both axes.
+TEST(DiscreteDisc, ShareInFrameEqualsACountOverEveryPixel) {
+  for (const auto& [p, w, h] : {std::tuple{GatherPattern{9, 2}, 37, 23}, std::tuple{GatherPattern{21, 3}, 40, 17},
+                                std::tuple{GatherPattern{41, 2}, 24, 90}, std::tuple{GatherPattern{1, 2}, 5, 4}}) {
+    const float r2 = p.max_radius_px() * p.max_radius_px();
+    long inside = 0, taps = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int j = -p.half(); j <= p.half(); ++j)
+          for (int i = -p.half(); i <= p.half(); ++i) {
+            if (!in_disc(r2, i * p.spacing_px, j * p.spacing_px)) continue;
+            ++taps;
+            const int sx = x + i * p.spacing_px, sy = y + j * p.spacing_px;
+            inside += sx >= 0 && sx < w && sy >= 0 && sy < h;
+          }
+    EXPECT_NEAR(disc_share_in_frame(p, w, h), static_cast<double>(inside) / taps, 1e-12)
+        << "N " << p.size_n << " k " << p.spacing_px << " frame " << w << "x" << h;
+  }
+  EXPECT_EQ(disc_share_in_frame({1, 2}, 800, 600), 1.0);  // a pixel's own sample is always inside
 }
 
 TEST(DiscreteDisc, DiscIndexAndReachMatchInDisc) {
