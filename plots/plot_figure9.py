@@ -24,6 +24,9 @@ def label(series, point):
     text = f"{series['method']} ({point['precision']})"
     if fit:
         text += f"  ~N^{fit['exponent']:.2f} [{fit['low']:.2f}, {fit['high']:.2f}]"
+    unclipped = series["fits"].get("larger_half_unclipped")
+    if unclipped:  # without the frame's clipping of the pattern (figure9.json: frame_clipping)
+        text += f", unclipped {unclipped['exponent']:.2f}"
     return text
 
 
