@@ -48,7 +48,7 @@ double median_ms(const nlohmann::json& point) { return point["frame_ms"]["median
 
 // off / on of the samples the two points took side by side in the same round: the machine's drift
 // (a shared VM moves by 2x within minutes) cancels in each ratio. Their median with its 95% interval
-// (bootstrap over rounds, intervals.hpp) and their quartiles.
+// (the order statistics of the rounds, intervals.hpp) and their quartiles.
 nlohmann::json paired_speedup(const nlohmann::json& off, const nlohmann::json& on) {
   const RoundValues off_ms = round_values(off), on_ms = round_values(on);
   const auto ratio = paired_ratio_interval(off_ms, on_ms);

@@ -2,7 +2,7 @@
 // any other method asked for), on the Vulkan device and as CPU references, measured interleaved.
 //
 // Its claims are figures drawn from several points: the naive/FLAG ratio at each N and the growth
-// exponent of each curve. Each comes with a 95% interval from a bootstrap over rounds
+// exponent of each curve. Each comes with a 95% interval from the rounds' order statistics
 // (intervals.hpp), and the run measures until every one is as tight as asked (--target-ratio-pct,
 // --target-exponent) or the budget is spent, then says which. Naive and FLAG at one N are visited
 // back to back in every round, taking turns going first, so each round gives one paired ratio.
@@ -96,29 +96,22 @@ const RoundValues& values_of(const RoundPoint& p, Metric metric) { return metric
 // each other, so a slow phase of the machine (this VM ran 1.3-1.5x slower for 12 of 27 rounds)
 // scales a whole round's curve and leaves its exponent; a fit of per-point medians over all rounds
 // mixes the phases, point by point, and measured 1.30 [1.15, 1.99] for naive on lavapipe where the
-// per-round fits gave 1.76 [1.70, 1.82] (quartiles).
-Interval exponent(const RoundBootstrap& bootstrap, const std::vector<const RoundValues*>& curve,
-                  const std::vector<double>& n, std::size_t from) {
+// per-round fits gave 1.76 [1.70, 1.82] (quartiles). Over the rounds that hold the whole curve
+// (points leave the rounds once their figures have settled, runner::Hooks::points_needed).
+Interval exponent(const std::vector<const RoundValues*>& curve, const std::vector<double>& n, std::size_t from) {
   const std::vector<double> x(n.begin() + static_cast<std::ptrdiff_t>(from), n.end());
-  RoundValues per_round;  // the exponent of each round with a sample at every n
-  for (int round : bootstrap.rounds()) {
+  std::vector<double> per_round;
+  for (const auto& [round, unused] : *curve[from]) {
     std::vector<double> y;
     for (std::size_t i = from; i < curve.size(); ++i)
       if (auto it = curve[i]->find(round); it != curve[i]->end() && it->second > 0) y.push_back(it->second);
-    if (y.size() == x.size()) per_round[round] = fit_power_law(x, y).exponent;
+    if (y.size() == x.size()) per_round.push_back(fit_power_law(x, y).exponent);
   }
-  // Resampled over the rounds that hold the whole curve (points leave the rounds once their figures
-  // have settled, runner::Hooks::points_needed).
-  std::vector<int> rounds;
-  for (const auto& [round, unused] : per_round) rounds.push_back(round);
-  if (rounds.size() == bootstrap.rounds().size())
-    return bootstrap.interval([&](const std::vector<int>& drawn) { return median_over(per_round, drawn); });
-  return RoundBootstrap(rounds).interval([&](const std::vector<int>& drawn) { return median_over(per_round, drawn); });
+  return median_interval(std::move(per_round));
 }
 
 // One curve (a method's variant on a backend, points in N order): medians and exponents.
-nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metric, const RoundBootstrap& bootstrap,
-                          bool headlines_only) {
+nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metric, bool headlines_only) {
   std::vector<double> n, medians, low, high, iqr;
   std::vector<const RoundValues*> curve;
   for (const auto* p : pts) {
@@ -128,9 +121,8 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
     std::vector<double> samples;
     for (const auto& [round, ms] : v) samples.push_back(ms);
     iqr.push_back(runner::distribution(samples).relative_iqr());
-    medians.push_back(runner::quantile(samples, 0.5));
-    const Interval median =
-        headlines_only ? Interval{} : bootstrap.interval([&](const std::vector<int>& d) { return median_over(v, d); });
+    const Interval median = median_interval(v);
+    medians.push_back(median.estimate);
     low.push_back(median.low);
     high.push_back(median.high);
   }
@@ -138,7 +130,7 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
   const std::size_t half = n.size() / 2;
   for (auto [name, from] : {std::pair{"all_sizes", std::size_t{0}}, std::pair{"larger_half", half}}) {
     if (n.size() - from < 2 || (headlines_only && from == 0)) continue;
-    const Interval b = exponent(bootstrap, curve, n, from);
+    const Interval b = exponent(curve, n, from);
     const auto at = static_cast<std::ptrdiff_t>(from);
     const PowerLawFit fit = fit_power_law({n.begin() + at, n.end()}, {medians.begin() + at, medians.end()});
     // exponent: the median of the per-round fits (exponent()); coefficient and r^2: the medians' fit.
@@ -154,7 +146,7 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
       std::vector<const RoundValues*> pass_curve;
       for (const auto* p : pts)
         if (auto it = p->pass_ms.find(pass); it != p->pass_ms.end()) pass_curve.push_back(&it->second);
-      if (pass_curve.size() == pts.size()) pass_fits[pass] = interval_json(exponent(bootstrap, pass_curve, n, half));
+      if (pass_curve.size() == pts.size()) pass_fits[pass] = interval_json(exponent(pass_curve, n, half));
     }
   std::sort(iqr.begin(), iqr.end());
   return {{"N", n}, {"median_ms", medians}, {"median_ms_low", low}, {"median_ms_high", high},
@@ -164,12 +156,6 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
 // `headlines_only`: the ratios and larger-half exponents alone (what the stopping rule reads).
 Figures figures(const std::vector<RoundPoint>& points, Metric metric, double target_ratio, double target_exponent,
                 bool headlines_only = false) {
-  int rounds = 0;
-  for (const auto& p : points)
-    if (!p.wall_ms.empty()) rounds = std::max(rounds, p.wall_ms.rbegin()->first + 1);
-  std::vector<int> all(static_cast<std::size_t>(rounds));
-  std::iota(all.begin(), all.end(), 0);
-  const RoundBootstrap bootstrap(all);
   Figures out;
   std::set<std::string> variants;
   for (const auto& p : points) variants.insert(p.variant);
@@ -181,7 +167,7 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
           if (p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
         if (pts.empty()) continue;
         std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
-        nlohmann::json curve = curve_json(pts, metric, bootstrap, headlines_only);
+        nlohmann::json curve = curve_json(pts, metric, headlines_only);
         if (curve["fits"].contains("larger_half")) {
           const auto& f = curve["fits"]["larger_half"];
           const double half_width = (f["high"].get<double>() - f["low"].get<double>()) / 2;
@@ -271,8 +257,9 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
   nlohmann::json drift = nlohmann::json::object();
   for (const auto& [name, probe] : doc["measurement"]["probes"].items()) drift[name] = probe["drift"];
   doc["headlines"] = {
-      {"interval", "95%, percentile bootstrap over rounds (1000 resamples of whole rounds); ratios are the median "
-                   "over rounds of naive / FLAG measured back to back in the same round"},
+      {"interval", "95%, distribution-free interval of a median from the rounds' order statistics (exact for "
+                   "independent rounds); ratios are the median over rounds of naive / FLAG measured back to back in "
+                   "the same round, exponents the median over rounds of each round's own fit"},
       {"repeat_interval", "repeat_low/repeat_high: where a repeat run on this machine would put its estimate, at 95% "
                           "(the interval widened by sqrt(2)); a repeat run's estimate falls in the plain 95% interval "
                           "only about 83% of the time"},
@@ -384,10 +371,10 @@ void figure9(Figure9Options& o) {
   // A point leaves the rounds once every ratio and exponent it feeds is within its target: naive's
   // points (the costliest) settle first, and the budget goes to the figures still too wide; the run
   // ends when every figure is (no point needed).
-  // Not before 10 rounds: a bootstrap over fewer rounds understates its interval, and a figure stopped
-  // the first time its interval looks tight would be claimed tighter than it is (measured: leaving from
-  // 5 rounds on, two default runs agreed on 14 of 18 figures and their 95% intervals covered each other
-  // for 10 of 18).
+  // Not before 10 rounds: a figure stopped the first time its interval looks tight is claimed tighter
+  // than it is, the more so the fewer rounds it has (measured with the bootstrap intervals used before:
+  // leaving from 5 rounds on, two default runs agreed on 14 of 18 figures and their 95% intervals
+  // covered each other for 10 of 18).
   s.points_needed = [&points, target_ratio, target_exponent](const runner::RunRecord& record) {
     if (record.round_order.size() < 10) return std::vector<bool>(points.size(), true);
     const std::set<std::string> needed =

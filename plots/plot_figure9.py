@@ -8,7 +8,7 @@ usage: plot_figure9.py FIGURE9_JSON OUT_PREFIX
 The paper's figure has one row per backend (GPU and CPU times differ by orders of magnitude on a
 real GPU, so each gets its own axes): frame time on linear axes, as in the paper; the same on log-log
 axes, where a power law is a straight line and the fitted exponent (legend) its slope; and naive /
-FLAG at each N. Markers are medians, bars and bands their 95% intervals (bootstrap over rounds).
+FLAG at each N. Markers are medians, bars and bands their 95% intervals (order statistics of the rounds).
 The other methods' figure has a log time axis, so that no curve flattens the rest.
 """
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <random>
 
 #include "runner.hpp"
 
@@ -23,22 +22,6 @@ Interval repeat_run(const Interval& confidence) {
           confidence.estimate + widen * (confidence.high - confidence.estimate)};
 }
 
-double median_over(const RoundValues& values, const std::vector<int>& rounds) {
-  std::vector<double> drawn;
-  for (int r : rounds)
-    if (auto it = values.find(r); it != values.end()) drawn.push_back(it->second);
-  return drawn.empty() ? std::numeric_limits<double>::quiet_NaN() : runner::quantile(std::move(drawn), 0.5);
-}
-
-double paired_ratio(const RoundValues& a, const RoundValues& b, const std::vector<int>& rounds) {
-  std::vector<double> ratios;
-  for (int r : rounds) {
-    const auto x = a.find(r), y = b.find(r);
-    if (x != a.end() && y != b.end() && y->second > 0) ratios.push_back(x->second / y->second);
-  }
-  return ratios.empty() ? std::numeric_limits<double>::quiet_NaN() : runner::quantile(std::move(ratios), 0.5);
-}
-
 RoundValues round_values(const nlohmann::json& point, const char* field) {
   RoundValues out;
   const auto& values = point[field];
@@ -46,36 +29,35 @@ RoundValues round_values(const nlohmann::json& point, const char* field) {
   return out;
 }
 
-RoundBootstrap::RoundBootstrap(std::vector<int> rounds, int resamples, std::uint64_t seed) : rounds_(std::move(rounds)) {
-  if (rounds_.empty()) return;
-  std::mt19937_64 rng(seed);
-  std::uniform_int_distribution<std::size_t> pick(0, rounds_.size() - 1);
-  draws_.resize(static_cast<std::size_t>(resamples));
-  for (auto& draw : draws_) {
-    draw.resize(rounds_.size());
-    for (int& r : draw) r = rounds_[pick(rng)];
+Interval median_interval(std::vector<double> values) {
+  std::erase_if(values, [](double v) { return !std::isfinite(v); });
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (values.empty()) return {nan, nan, nan};
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  // B ~ Binomial(n, 1/2): the number of rounds below the true median.
+  std::size_t k = 1;      // [min, max] when even P(B < 1) = 2^-n exceeds 2.5% (n < 6)
+  double cumulative = 0;  // P(B <= j), summed in logs (n may be in the hundreds)
+  for (std::size_t j = 0; 2 * (j + 1) <= n; ++j) {
+    cumulative += std::exp(std::lgamma(n + 1.0) - std::lgamma(j + 1.0) - std::lgamma(n - j + 1.0) - n * std::log(2.0));
+    if (cumulative > 0.025) break;
+    k = j + 1;  // P(B < k) = P(B <= j) <= 2.5%
   }
+  return {runner::quantile(values, 0.5), values[k - 1], values[n - k]};
 }
 
-Interval RoundBootstrap::interval(const std::function<double(const std::vector<int>& rounds)>& statistic) const {
-  Interval out;
-  out.estimate = out.low = out.high = statistic(rounds_);
-  std::vector<double> values;
-  for (const auto& draw : draws_)
-    if (const double v = statistic(draw); std::isfinite(v)) values.push_back(v);
-  if (!values.empty()) {
-    out.low = runner::quantile(values, 0.025);
-    out.high = runner::quantile(values, 0.975);
-  }
-  return out;
+Interval median_interval(const RoundValues& values) {
+  std::vector<double> v;
+  for (const auto& [round, value] : values) v.push_back(value);
+  return median_interval(std::move(v));
 }
 
 std::optional<Interval> paired_ratio_interval(const RoundValues& a, const RoundValues& b) {
-  std::vector<int> shared;
+  std::vector<double> ratios;
   for (const auto& [round, value] : a)
-    if (b.count(round)) shared.push_back(round);
-  if (shared.empty()) return std::nullopt;
-  return RoundBootstrap(shared).interval([&](const std::vector<int>& d) { return paired_ratio(a, b, d); });
+    if (auto it = b.find(round); it != b.end() && it->second > 0) ratios.push_back(value / it->second);
+  if (ratios.empty()) return std::nullopt;
+  return median_interval(std::move(ratios));
 }
 
 }  // namespace bokeh
