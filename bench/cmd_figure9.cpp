@@ -6,9 +6,7 @@
 // (intervals.hpp), and the run measures until every one is as tight as asked (--target-ratio-pct,
 // --target-exponent) or the budget is spent, then says which. Naive and FLAG at one N are visited
 // back to back in every round, taking turns going first, so each round gives one paired ratio.
-#include <cmath>
-#include <limits>
-#include <numeric>
+#include <algorithm>
 #include <set>
 
 #include <fmt/format.h>
