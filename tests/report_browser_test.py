@@ -68,14 +68,16 @@ def main(bokehbench, workdir, real_run, plots_dir):
     assert len(series) == len(base["points"]), (len(series), len(base["points"]))
     assert len(ratios) == len(base["naive_over_flag"]) and ratios, (len(ratios), len(base["naive_over_flag"]))
     assert len(exponents) == sum(len(c["fits"]) for c in base["series"]) and exponents, len(exponents)
-    assert len(all_series) == len(series) + len(ratios) + len(exponents), [s["point"] for s in all_series]
+    probes = [s for s in all_series if s["headline"] and s["point"].startswith("probe/")]
+    assert len(probes) == len(base["measurement"]["probes"]), len(probes)
+    assert len(all_series) == len(series) + len(ratios) + len(exponents) + len(probes), [s["point"] for s in all_series]
     for s in series + ratios:
         assert len(s["steps"]) == 1, s
         step = s["steps"][0]
         assert step["commit"] == f"c{STEP_AT:02d}" and step["before_commit"] == f"c{STEP_AT - 1:02d}", step
         assert abs(step["ratio"] - FACTOR) < 1e-9, step
-    for s in exponents:  # unchanged over the 12 commits: no change point
-        assert s["steps"] == [] and s["commits"] == 12 and s["unit"] == "exponent", s
+    for s in exponents + probes:  # unchanged over the 12 commits: no change point
+        assert s["steps"] == [] and s["commits"] == 12 and s["unit"] in ("exponent", "ms"), s
     print(f"{len(series)} point series and {len(ratios)} naive/FLAG ratio series, each with its one step at "
           f"c{STEP_AT:02d} (x{FACTOR}); {len(exponents)} exponent series without one")
     one = run([bokehbench, "history", "series", "--store", str(store), "--point", ratios[0]["point"]]).stdout
@@ -92,7 +94,7 @@ def main(bokehbench, workdir, real_run, plots_dir):
     rendered = re.search(r'data-rendered="trends:(\d+) headlines:(\d+) images:(\d+)/(\d+)"', done.stdout)
     assert rendered, "the page's load check did not run"
     trends, headlines, loaded, images = map(int, rendered.groups())
-    assert trends == len(all_series) and headlines == len(ratios) + len(exponents), (trends, headlines, len(all_series))
+    assert trends == len(all_series) and headlines == len(ratios) + len(exponents) + len(probes), (trends, headlines, len(all_series))
     assert images >= 1 and loaded == images, f"{loaded} of {images} plots decoded"
     print(f"chromium: {trends} trends drawn ({headlines} of headline figures), {loaded}/{images} plots decoded, no console messages")
     shot = work / "report.png"

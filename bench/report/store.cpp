@@ -516,6 +516,11 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
     return doc.contains(key) && doc[key].is_array() ? doc[key] : none;
   };
   if (schema == "bokehbench.stability") stability_headlines(doc, out);
+  // Every sweep: its calibration probes' median ms a round (the machine's state: machine_state()).
+  if (doc.contains("measurement") && doc["measurement"].contains("probes") && doc["measurement"]["probes"].is_object())
+    for (const auto& [probe, p] : doc["measurement"]["probes"].items())
+      if (p.contains("ms") && is_number(p["ms"], "median"))
+        out.push_back(figure("probe/" + probe, "ms", p["ms"]["median"].get<double>(), nlohmann::json()));
   // figure9: naive / FLAG per N and backend (paired within rounds), each curve's growth exponents.
   for (const auto& r : array("naive_over_flag"))
     if (is_number(r, "naive_over_flag"))
@@ -546,6 +551,31 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
   for (const auto& r : array("paired_ratios"))
     if (is_number(r, "ratio")) out.push_back(figure("new_over_old/" + r.value("id", "?"), "ratio", r["ratio"].get<double>(), r));
   return out;
+}
+
+nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent_runs, double unusual_ratio) {
+  const std::string machine = machine_key(doc.at("context"));
+  nlohmann::json probes = nlohmann::json::object(), unusual = nlohmann::json::array();
+  int earlier_runs = 0;
+  for (const HeadlineRow& h : headlines_of(doc)) {
+    if (h.name.rfind("probe/", 0) != 0) continue;
+    std::vector<double> earlier;
+    for (const SeriesValue& v : store.headline_series(h.name))
+      if (v.machine == machine) earlier.push_back(v.median_ms);
+    if (earlier.size() > static_cast<std::size_t>(recent_runs))
+      earlier.erase(earlier.begin(), earlier.end() - recent_runs);  // oldest first: keep the latest
+    if (earlier.empty()) continue;
+    earlier_runs = std::max(earlier_runs, static_cast<int>(earlier.size()));
+    std::sort(earlier.begin(), earlier.end());
+    const std::size_t m = earlier.size();
+    const double usual = m % 2 ? earlier[m / 2] : (earlier[m / 2 - 1] + earlier[m / 2]) / 2;
+    const double ratio = h.value / usual;
+    const std::string name = h.name.substr(6);
+    probes[name] = {{"this_run_ms", h.value}, {"usual_ms", usual}, {"ratio", ratio}, {"earlier_runs", m}};
+    if (m >= kMachineStateMinRuns && (ratio > unusual_ratio || ratio < 1 / unusual_ratio)) unusual.push_back(name);
+  }
+  return {{"earlier_runs", earlier_runs}, {"recent_runs_compared", recent_runs}, {"unusual_ratio", unusual_ratio},
+          {"min_earlier_runs", kMachineStateMinRuns}, {"probes", probes}, {"unusual", unusual}};
 }
 
 std::int64_t append_run(const std::string& url, const nlohmann::json& doc, const std::string& command) {

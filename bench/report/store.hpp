@@ -125,6 +125,15 @@ std::vector<PointRow> points_of(const nlohmann::json& doc);
 // paired_ratios, stability's safe ranges. tradeoff has none (its Pareto front is a set, not a figure).
 std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc);
 
+// How the machine's state during a run (`doc`, not yet appended) compares with its earlier runs in the
+// store: per calibration probe, this run's median ms against the median of the same machine's (machine_key)
+// last `recent_runs` complete runs; a probe `unusual_ratio` times slower or faster is listed in "unusual"
+// once there are kMachineStateMinRuns earlier runs (against fewer, "usual" may itself be a phase).
+// A shared VM has phases that last longer than a run (two figure9 runs 5 minutes apart: copy probes 1.6x
+// apart, naive/FLAG ratios up to 12%), which no interval drawn from one run's rounds can cover.
+constexpr int kMachineStateMinRuns = 3;
+nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent_runs = 10, double unusual_ratio = 1.3);
+
 // A command's run appended to the store at `url` once its results file is written (the file is the
 // run's output; the store its history), as `doc` (with its schema and context) by Store::append_document;
 // prints the run's id. Every command appends through here. Throws, naming the store, when it cannot take

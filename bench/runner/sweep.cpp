@@ -527,6 +527,44 @@ void append_to_store(const SweepSettings& s, const nlohmann::json& context, cons
   history::append_run(s.store_url, doc, command_line());
 }
 
+// The machine's state during the run against its earlier runs in the store (history::machine_state),
+// before this run is appended; with no store, or none yet, there is nothing to compare with.
+void add_machine_state(const SweepSettings& s, const nlohmann::json& context, nlohmann::json& doc) {
+  if (s.store_url.empty() || !doc.contains("measurement")) return;
+  nlohmann::json& measurement = doc["measurement"];
+  try {
+    auto store = history::Store::open(s.store_url, false);
+    measurement["machine_state"] = history::machine_state(*store, {{"context", context}, {"measurement", measurement}});
+  } catch (const std::exception& e) {
+    measurement["machine_state"] = {{"earlier_runs", 0}, {"note", e.what()}};
+  }
+}
+
+void print_machine_state(const nlohmann::json& measurement) {
+  if (!measurement.contains("machine_state")) return;
+  const auto& m = measurement["machine_state"];
+  if (m["earlier_runs"].get<int>() == 0) {
+    fmt::print("machine state: no earlier run of this machine in the results store to compare its probes with\n");
+    return;
+  }
+  std::string probes;
+  for (const auto& [name, p] : m["probes"].items())
+    probes += fmt::format("{}{} {:.2f}x", probes.empty() ? "" : ", ", name, p["ratio"].get<double>());
+  const std::string against = fmt::format("this machine's median over its last {} runs in the store", m["earlier_runs"].get<int>());
+  if (m["unusual"].empty()) {
+    fmt::print("machine state: probes' times {} of {}{}\n", probes, against,
+               m["earlier_runs"].get<int>() < m["min_earlier_runs"].get<int>()
+                   ? fmt::format(" (too few to call a phase unusual: {} needed)", m["min_earlier_runs"].get<int>())
+                   : "");
+    return;
+  }
+  fmt::print("UNUSUAL MACHINE STATE: probes' times {} of {} ({} beyond {:.1f}x): the machine was in another phase "
+             "than its usual one, and figures measured in it may differ from other runs' by more than their "
+             "intervals, which cover only this run's rounds\n",
+             probes, against, fmt::join(m["unusual"].get<std::vector<std::string>>(), ", "),
+             m["unusual_ratio"].get<double>());
+}
+
 }  // namespace
 
 nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSettings& s) {
@@ -619,6 +657,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
   const bool complete = record.status == "complete";
   if (s.derive) s.derive(doc);
+  add_machine_state(s, context, doc);
   // gbench's own statistics and names, for compare.py.
   // Nothing measured yet (interrupted during the first visit, or every point skipped): gbench would
   // write only "Failed to match any benchmarks", so write an empty but valid document instead.
@@ -640,6 +679,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   std::filesystem::remove(files.partial_json);
   std::filesystem::remove(files.gbench_partial);
   if (s.summary) s.summary(doc);
+  print_machine_state(doc["measurement"]);
   fmt::print("wrote {} and {} ({})\n", files.final_json, files.gbench, duration_text(elapsed_s()));
   if (s.plot && !s.plot_script.empty())
     run_plot_script(s.plot_script, files.final_json, (std::filesystem::path(s.plots_dir) / s.name).string());

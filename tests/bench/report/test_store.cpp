@@ -87,6 +87,44 @@ std::vector<PointRow> two_points(double scale) {
   return {a, b};
 }
 
+// A sweep's calibration probes are headline figures of every run ("probe/NAME", ms), and
+// machine_state holds a run's against the median of the same machine's earlier runs: a copy probe
+// 1.6x slower (a shared VM's memory-bound phase) is unusual, 1.1x is not, another machine's runs and
+// runs beyond the most recent `recent_runs` do not count, and a store with none says so.
+TEST_P(StoreTest, MachineStateComparesTheProbesWithThisMachinesEarlierRuns) {
+  auto sweep_doc = [](const std::string& cpu, const std::string& date, double copy_ms, double fma_ms) {
+    return nlohmann::json{
+        {"schema", "bokehbench.figure9"},
+        {"status", "complete"},
+        {"context", {{"cpu_model", cpu}, {"cpu_cores", 2}, {"date_utc", date}, {"git_commit", "c"}}},
+        {"points", nlohmann::json::array()},
+        {"measurement",
+         {{"probes", {{"gpu_copy", {{"ms", {{"median", copy_ms}}}}}, {"gpu_fma", {{"ms", {{"median", fma_ms}}}}}}}}}};
+  };
+  auto store = Store::open(url_, true);
+  const nlohmann::json first = sweep_doc("EPYC", "2026-01-01T00:00:00Z", 20, 40);
+  EXPECT_EQ(machine_state(*store, first)["earlier_runs"], 0);
+  store->append_document(sweep_doc("EPYC", "2026-01-01T00:00:00Z", 99, 99), "old", "run");  // beyond the latest 3
+  EXPECT_TRUE(machine_state(*store, first)["unusual"].empty()) << "one earlier run is too few to call a phase unusual";
+  for (int i = 1; i <= 3; ++i)
+    store->append_document(sweep_doc("EPYC", fmt::format("2026-01-0{}T00:00:00Z", i + 1), 19 + i, 40), "x", "run");
+  store->append_document(sweep_doc("Xeon", "2026-01-09T00:00:00Z", 5, 5), "other machine", "run");
+  const auto h = store->headlines(store->runs().front().id);
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h[0].name, "probe/gpu_copy");
+  EXPECT_EQ(h[0].unit, "ms");
+
+  const nlohmann::json slow = machine_state(*store, sweep_doc("EPYC", "2026-01-10T00:00:00Z", 33.6, 44), 3);
+  EXPECT_EQ(slow["earlier_runs"], 3);
+  EXPECT_DOUBLE_EQ(slow["probes"]["gpu_copy"]["usual_ms"].get<double>(), 21.0);  // median of 20, 21, 22
+  EXPECT_NEAR(slow["probes"]["gpu_copy"]["ratio"].get<double>(), 1.6, 1e-12);
+  EXPECT_NEAR(slow["probes"]["gpu_fma"]["ratio"].get<double>(), 1.1, 1e-12);
+  EXPECT_EQ(slow["unusual"], nlohmann::json::array({"gpu_copy"}));
+  EXPECT_TRUE(machine_state(*store, sweep_doc("EPYC", "2026-01-10T00:00:00Z", 16.8, 40), 3)["unusual"].empty());
+  EXPECT_EQ(machine_state(*store, sweep_doc("EPYC", "2026-01-10T00:00:00Z", 10, 40), 3)["unusual"],
+            nlohmann::json::array({"gpu_copy"})) << "faster counts too";
+}
+
 TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
   auto store = Store::open(url_, true);
   const auto id = store->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));
