@@ -13,6 +13,8 @@
 #include <pqxx/pqxx>
 #endif
 
+#include "runner.hpp"
+
 namespace bokeh::history {
 
 namespace {
@@ -565,10 +567,9 @@ nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent
     if (earlier.size() > static_cast<std::size_t>(recent_runs))
       earlier.erase(earlier.begin(), earlier.end() - recent_runs);  // oldest first: keep the latest
     if (earlier.empty()) continue;
-    earlier_runs = std::max(earlier_runs, static_cast<int>(earlier.size()));
-    std::sort(earlier.begin(), earlier.end());
     const std::size_t m = earlier.size();
-    const double usual = m % 2 ? earlier[m / 2] : (earlier[m / 2 - 1] + earlier[m / 2]) / 2;
+    earlier_runs = std::max(earlier_runs, static_cast<int>(m));
+    const double usual = runner::quantile(std::move(earlier), 0.5);
     const double ratio = h.value / usual;
     const std::string name = h.name.substr(6);
     probes[name] = {{"this_run_ms", h.value}, {"usual_ms", usual}, {"ratio", ratio}, {"earlier_runs", m}};
