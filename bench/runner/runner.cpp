@@ -243,7 +243,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     drop(i);
   };
 
-  const bool by_headlines = hooks.headlines_settled || hooks.points_needed;
+  const bool by_headlines = static_cast<bool>(hooks.points_needed);
   for (int round = 0; !active.empty() && !interrupted(); ++round) {
     const std::vector<std::size_t> order = round_order(active, hooks.visit_group, hooks.visit_block, round, rng);
     record.round_order.push_back(order);
@@ -346,9 +346,6 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     }
     if (active.empty()) {
       record.stop_reason = by_headlines ? "max_samples reached" : "every point settled";
-    } else if (hooks.headlines_settled && everyone_has_min && hooks.headlines_settled(record)) {
-      record.stop_reason = "headlines settled";
-      break;
     } else if (everyone_has_min && seconds_since(start) >= policy.budget_s) {
       record.stop_reason = "budget spent";
       break;

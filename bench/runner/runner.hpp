@@ -11,7 +11,7 @@
 // A point leaves the rounds once it has min_samples and its relative IQR is at most
 // settled_relative_iqr, or at max_samples; rounds stop when no point is left, or when the budget is
 // spent and every point has min_samples. A command whose claims are figures derived from several
-// points (a ratio, a growth exponent) stops on those instead (Hooks::headlines_settled).
+// points (a ratio, a growth exponent) stops on those instead (Hooks::points_needed).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -116,15 +116,11 @@ struct Hooks {
   // curve comes from measurements seconds apart, not spread over the whole round); the blocks' order
   // and the groups' order inside a block are shuffled. Empty: every group is a block of its own.
   std::vector<std::size_t> visit_block;
-  // After every round from min_samples on: true ends the run (the command's headline figures are
-  // as tight as it asked). When set, no point leaves the rounds by its own IQR, since a figure
-  // drawn from several points needs them all in the same rounds; max_samples and the budget still
-  // end the run.
-  std::function<bool(const RunRecord& record)> headlines_settled;
   // After every round once every active point has min_samples: needed[i] false takes point i out of
   // the rounds (settled): every figure it feeds is as tight as asked, so later rounds spend their time
-  // on the figures still too wide; the run ends when no point is needed. As with headlines_settled,
-  // no point leaves by its own IQR. Empty: points leave only as above.
+  // on the figures still too wide; the run ends when no point is needed ("headlines settled"). When
+  // set, no point leaves by its own IQR, since a figure drawn from several points needs them all in
+  // the same rounds; max_samples and the budget still end the run. Empty: points leave as above.
   std::function<std::vector<bool>(const RunRecord& record)> points_needed;
 };
 

@@ -639,7 +639,6 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     std::map<std::string, std::size_t> blocks;
     for (const auto& p : points) hooks.visit_block.push_back(blocks.emplace(s.visit_block(p), blocks.size()).first->second);
   }
-  hooks.headlines_settled = s.headlines_settled;
   hooks.points_needed = s.points_needed;
 
   fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),

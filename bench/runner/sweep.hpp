@@ -111,9 +111,6 @@ struct SweepSettings {
   // Groups visited one after another in every round (runner::Hooks::visit_block): those whose points'
   // keys are equal. Empty: every group on its own.
   std::function<std::string(const SweepPoint&)> visit_block;
-  // Ends the rounds once the command's headline figures are as tight as it asked
-  // (runner::Hooks::headlines_settled).
-  std::function<bool(const runner::RunRecord&)> headlines_settled;
   // Which points a figure still too wide needs (runner::Hooks::points_needed); empty: all of them.
   std::function<std::vector<bool>(const runner::RunRecord&)> points_needed;
   // Adds the command's derived results (fits, ratios, Pareto front) to the document.

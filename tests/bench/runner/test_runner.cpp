@@ -57,7 +57,6 @@ struct Harness {
   std::vector<std::string> fail_on_prepare;  // per point: throw this text from prepare
   std::vector<std::size_t> visit_group;                      // runner::Hooks::visit_group
   std::vector<std::size_t> visit_block;                      // runner::Hooks::visit_block
-  std::function<bool(const RunRecord&)> headlines_settled;   // runner::Hooks::headlines_settled
   std::function<std::vector<bool>(const RunRecord&)> points_needed;  // runner::Hooks::points_needed
 
   RunRecord run(const std::vector<double>& times, const Policy& policy, const std::vector<std::string>& skip = {},
@@ -77,7 +76,6 @@ struct Harness {
     hooks.checkpoint = std::move(checkpoint);
     hooks.visit_group = visit_group;
     hooks.visit_block = visit_block;
-    hooks.headlines_settled = headlines_settled;
     hooks.points_needed = points_needed;
     return runner::run(names, skip, policy, hooks);
   }
@@ -300,7 +298,7 @@ TEST(Runner, HeadlinesSettledEndsTheRoundsAndKeepsEveryPointInThem) {
   h.jitter = {{}, {0.0, 0.5, -0.3}};
   Policy p = fast_policy();
   p.max_samples = 20;
-  h.headlines_settled = [](const RunRecord& r) { return r.round_order.size() >= 4; };
+  h.points_needed = [](const RunRecord& r) { return std::vector<bool>(2, r.round_order.size() < 4); };
   const RunRecord r = h.run({2, 2}, p);
   EXPECT_EQ(r.stop_reason, "headlines settled");
   EXPECT_EQ(r.round_order.size(), 4u);
