@@ -159,6 +159,15 @@ std::string shown(const std::string& url) {
 
 double number(const std::optional<std::string>& text) { return text ? std::strtod(text->c_str(), nullptr) : 0.0; }
 std::string text(const std::optional<std::string>& t) { return t.value_or(""); }
+
+// A series value's run, from a row whose first columns are r.id, r.commit_hash, r.date_utc, r.machine,
+// r.shard (the series queries select them first).
+SeriesValue series_value_of_run(const Connection::Row& r) {
+  SeriesValue v;
+  v.run_id = std::stoll(text(r[0]));
+  v.commit = text(r[1]), v.date_utc = text(r[2]), v.machine = text(r[3]), v.shard = text(r[4]);
+  return v;
+}
 std::string num(double v) { return fmt::format("{:.17g}", v); }
 
 // Samples are stored as a comma-separated list in one row per point (a row per sample made a run's
@@ -317,9 +326,7 @@ std::vector<SeriesValue> Store::headline_series(const std::string& name) {
            "FROM headlines h JOIN runs r ON r.id = h.run_id WHERE h.name = $1 AND r.status = 'complete' "
            "ORDER BY r.date_utc, r.id",
            {name})) {
-    SeriesValue v;
-    v.run_id = std::stoll(text(r[0]));
-    v.commit = text(r[1]), v.date_utc = text(r[2]), v.machine = text(r[3]), v.shard = text(r[4]);
+    SeriesValue v = series_value_of_run(r);
     v.median_ms = number(r[5]), v.q1_ms = number(r[6]), v.q3_ms = number(r[7]);
     v.has_interval = text(r[8]) == "1";
     v.samples_ms = v.samples_cpu_ms = {v.median_ms};
@@ -384,9 +391,7 @@ std::vector<SeriesValue> Store::series(const std::string& point_id) {
            "s.frame_ms, s.cpu_ms, r.sweep FROM points p JOIN runs r ON r.id = p.run_id JOIN samples s ON s.run_id = p.run_id AND "
            "s.point_id = p.point_id WHERE p.point_id = $1 AND r.status = 'complete' ORDER BY r.date_utc, r.id",
            {point_id})) {
-    SeriesValue v;
-    v.run_id = std::stoll(text(r[0]));
-    v.commit = text(r[1]), v.date_utc = text(r[2]), v.machine = text(r[3]), v.shard = text(r[4]);
+    SeriesValue v = series_value_of_run(r);
     v.median_ms = number(r[5]), v.q1_ms = number(r[6]), v.q3_ms = number(r[7]), v.cpu_median_ms = number(r[8]);
     v.samples_ms = split(text(r[9])), v.samples_cpu_ms = split(text(r[10]));
     v.sweep = text(r[11]);
