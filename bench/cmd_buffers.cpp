@@ -18,6 +18,7 @@
 #include "accuracy.hpp"
 #include "commands.hpp"
 #include "flag.hpp"
+#include "intervals.hpp"
 #include "report.hpp"
 #include "run.hpp"
 #include "scene.hpp"
@@ -48,17 +49,15 @@ std::string frame_key(const nlohmann::json& p) {
 }
 
 // Streamed over full-buffer frame time: the median of the ratios of the rounds in which both took a
-// sample (each round's two samples are adjacent in time: a drifting machine moves both).
+// sample (each round's two samples are adjacent in time: a drifting machine moves both), with its 95%
+// interval (intervals.hpp).
 nlohmann::json streamed_vs_full(const nlohmann::json& streamed, const nlohmann::json& full) {
-  std::map<int, double> full_ms;
-  for (std::size_t i = 0; i < full["sample_rounds"].size(); ++i)
-    full_ms[full["sample_rounds"][i].get<int>()] = full["samples_ms"][i].get<double>();
-  std::vector<double> ratios;
-  for (std::size_t i = 0; i < streamed["sample_rounds"].size(); ++i)
-    if (auto it = full_ms.find(streamed["sample_rounds"][i].get<int>()); it != full_ms.end() && it->second > 0)
-      ratios.push_back(streamed["samples_ms"][i].get<double>() / it->second);
-  if (ratios.empty()) return nullptr;
-  return {{"frame_ms_ratio_median", runner::quantile(ratios, 0.5)}, {"rounds", ratios.size()}};
+  const RoundValues streamed_ms = round_values(streamed), full_ms = round_values(full);
+  const std::optional<Interval> ratio = paired_ratio_interval(streamed_ms, full_ms);
+  if (!ratio) return nullptr;
+  std::size_t rounds = 0;
+  for (const auto& [round, ms] : streamed_ms) rounds += full_ms.count(round);
+  return {{"frame_ms_ratio_median", ratio->estimate}, {"low", ratio->low}, {"high", ratio->high}, {"rounds", rounds}};
 }
 
 void buffers(BuffersOptions& o) {
@@ -116,14 +115,16 @@ void buffers(BuffersOptions& o) {
   s.derive = derive_buffers;  // reads the budget lines from config (as merge does)
   s.summary = [lines](const nlohmann::json& doc) {
     // Every point (and every skip) by frame: the memory / time / accuracy trade in one table.
-    fmt::print("\n{:<66} {:>10} {:>10} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms", "PSNR", "vs f32", "streamed/full");
+    fmt::print("\n{:<66} {:>10} {:>24} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms [95%]", "PSNR", "vs f32",
+               "streamed/full [95%]");
     for (const auto& p : doc["points"]) {
       std::string ratio;
       if (p.contains("streamed_vs_full") && !p["streamed_vs_full"].is_null())
-        ratio = fmt::format("{:.2f}x ({} rounds)", p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(),
+        ratio = fmt::format("{:.2f}x [{:.2f}-{:.2f}] ({} rounds)", p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(),
+                            p["streamed_vs_full"]["low"].get<double>(), p["streamed_vs_full"]["high"].get<double>(),
                             p["streamed_vs_full"]["rounds"].get<int>());
-      fmt::print("{:<66} {:>10.2f} {:>10.1f} {:>9} {:>10}  {}\n", p["id"].get<std::string>(), allocated_mib(p),
-                 p["frame_ms"]["median"].get<double>(), psnr_text(p["error"]["vs_energy_sum"]),
+      fmt::print("{:<66} {:>10.2f} {:>24} {:>9} {:>10}  {}\n", p["id"].get<std::string>(), allocated_mib(p),
+                 interval_text(p["frame_ms_interval"], 2), psnr_text(p["error"]["vs_energy_sum"]),
                  psnr_text(p["error"]["vs_flag_f32"]), ratio);
     }
     for (const auto& sk : doc["skipped"])
@@ -137,8 +138,8 @@ void buffers(BuffersOptions& o) {
         return (*a)["frame_ms"]["median"].template get<double>() < (*b)["frame_ms"]["median"].template get<double>();
       });
       for (const auto* p : fit)
-        fmt::print("  {:<58} {:8.2f} MiB  frame {:9.2f} ms (FLAG passes {:8.2f})  PSNR vs f32 FLAG {}\n",
-                   (*p)["id"].get<std::string>(), allocated_mib(*p), (*p)["frame_ms"]["median"].get<double>(),
+        fmt::print("  {:<58} {:8.2f} MiB  frame {} ms (FLAG passes {:8.2f})  PSNR vs f32 FLAG {}\n",
+                   (*p)["id"].get<std::string>(), allocated_mib(*p), interval_text((*p)["frame_ms_interval"], 2),
                    (*p)["flag_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_flag_f32"]));
     }
   };

@@ -16,6 +16,7 @@
 #include "compare.hpp"
 #include "history.hpp"
 #include "html_report.hpp"
+#include "intervals.hpp"
 #include "merge.hpp"
 #include "report.hpp"
 #include "store.hpp"
@@ -162,6 +163,7 @@ void merge_files(const HistoryOptions& o) {
   std::vector<nlohmann::json> docs;
   for (const auto& f : o.files) docs.push_back(compare::load_results(f));
   nlohmann::json merged = merge_shards(docs, o.files);
+  add_frame_ms_intervals(merged);
   // The command's derived figures over all the merged points, by the command's own code (commands.hpp).
   static const std::map<std::string, void (*)(nlohmann::json&)> derivers = {{"bokehbench.figure9", derive_figure9},
                                                                              {"bokehbench.adaptive", derive_adaptive},

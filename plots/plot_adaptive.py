@@ -5,7 +5,7 @@ usage: plot_adaptive.py ADAPTIVE_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OU
 
 One group of bars per scene and largest CoC radius, one bar per method (colour: method, registry
 order). Panels: speed-up (worst-case over adaptive frame time of the samples both took in the same
-round, so the machine's drift cancels: median, bars the IQR; 1 = no gain); memory
+round, so the machine's drift cancels: median, bars its 95% interval; 1 = no gain); memory
 each mode allocated for the scene (log scale: methods differ by orders of magnitude; hatched =
 adaptive); PSNR of each mode against the exact energy-sum scatter (hatched = adaptive).
 """

@@ -3,7 +3,7 @@
 
 usage: plot_tradeoff.py TRADEOFF_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
 
-x: median frame time (log scale; bars span the interquartile range). y: PSNR against the exact
+x: median frame time (log scale; bars: its 95% interval, frame_ms_interval). y: PSNR against the exact
 energy-sum scatter (higher is better). Colour: method (registry order); marker: intermediate
 precision; hollow markers: intermediates at reduced resolution (marker size shrinks with the
 scale). The
@@ -41,10 +41,10 @@ def main(doc, prefix):
     cap = (max(finite) + 5) if finite else 60
     fig, ax = plt.subplots(figsize=(13, 6.5), constrained_layout=True)
     for c in configs:
-        t = c["frame_ms"]
+        t = c["frame_ms_interval"]
         scale = c["buffer_scale"]
         colour = COLOURS.get(c["method"], "k")
-        ax.errorbar([t["median"]], [psnr_of(c, cap)], xerr=[[t["median"] - t["q1"]], [t["q3"] - t["median"]]],
+        ax.errorbar([t["estimate"]], [psnr_of(c, cap)], xerr=[[t["estimate"] - t["low"]], [t["high"] - t["estimate"]]],
                     color=colour, marker=MARKERS.get(c["precision"], "o"), ms=SIZE.get(scale, 5), capsize=2,
                     ls="none", mfc=colour if scale == 1 else "none", alpha=0.85)
     ids = {c["id"]: c for c in configs}
@@ -66,7 +66,7 @@ def main(doc, prefix):
         ax.axhline(cap, color="grey", ls=":", lw=0.8)
         ax.text(ax.get_xlim()[0], cap, " exact (PSNR = inf)", va="bottom", fontsize=8, color="grey")
     ax.set_xscale("log")
-    ax.set_xlabel("frame time (ms, median over repetitions; bars: IQR) - log scale")
+    ax.set_xlabel("frame time (ms, median over rounds; bars: its 95% interval) - log scale")
     ax.set_ylabel("PSNR vs exact energy-sum scatter (dB, higher is better)")
     ax.grid(True, which="both", alpha=0.3)
 

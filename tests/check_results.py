@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """Checks on a command's results file beyond its JSON schema: what the schema cannot say.
 
-usage: check_results.py gbench|adaptive|injected FILE
+usage: check_results.py gbench|adaptive|injected|intervals FILE
 """
 import json
+import math
 import sys
 
 
@@ -41,8 +42,45 @@ def injected(d):
     print("frames per sample", frames)
 
 
+def median_interval(values):
+    """The median and its distribution-free 95% interval, computed here from the binomial directly: the
+    order statistics x(k), x(n + 1 - k), k the largest with P(Binomial(n, 1/2) < k) <= 2.5% (k >= 1)."""
+    x, n = sorted(values), len(values)
+    below = lambda k: sum(math.comb(n, j) for j in range(k)) / 2 ** n  # P(B < k)
+    k = max([1] + [k for k in range(1, n // 2 + 1) if below(k) <= 0.025])
+    median = (x[(n - 1) // 2] + x[n // 2]) / 2
+    return median, x[k - 1], x[n - k]
+
+
+def close(a, b):
+    return abs(a - b) <= 1e-9 * max(1.0, abs(b))
+
+
+def intervals(d):
+    """Every point's frame_ms_interval is the median of its samples with the order-statistic interval, and
+    (buffers) every streamed/full ratio is the median of the same-round ratios with theirs."""
+    for p in d["points"]:
+        got, want = p["frame_ms_interval"], median_interval(p["samples_ms"])
+        assert all(close(g, w) for g, w in zip((got["estimate"], got["low"], got["high"]), want)), (p["id"], got, want)
+        assert got["low"] <= got["estimate"] <= got["high"], p["id"]
+    by_id = {p["id"]: p for p in d["points"]}
+    ratios = 0
+    for p in d["points"]:
+        r = p.get("streamed_vs_full")
+        if not r:
+            continue
+        full = by_id[p["id"].replace("/layer_buffer:\"streamed\"", "").split("/band_rows:")[0]]
+        full_ms = dict(zip(full["sample_rounds"], full["samples_ms"]))
+        same_round = [ms / full_ms[r_] for r_, ms in zip(p["sample_rounds"], p["samples_ms"]) if r_ in full_ms]
+        want = median_interval(same_round)
+        got = (r["frame_ms_ratio_median"], r["low"], r["high"])
+        assert all(close(g, w) for g, w in zip(got, want)) and r["rounds"] == len(same_round), (p["id"], got, want)
+        ratios += 1
+    print(len(d["points"]), "points' median intervals and", ratios, "streamed/full ratio intervals check")
+
+
 if __name__ == "__main__":
-    checks = {"gbench": gbench, "adaptive": adaptive, "injected": injected}
+    checks = {"gbench": gbench, "adaptive": adaptive, "injected": injected, "intervals": intervals}
     if len(sys.argv) != 3 or sys.argv[1] not in checks:
         sys.exit(__doc__)
     with open(sys.argv[2]) as f:

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
 #include "runner.hpp"
 
 namespace bokeh {
@@ -14,6 +16,11 @@ double Interval::relative_half_width() const {
 
 nlohmann::json interval_json(const Interval& interval) {
   return {{"estimate", interval.estimate}, {"low", interval.low}, {"high", interval.high}};
+}
+
+std::string interval_text(const nlohmann::json& interval, int decimals) {
+  return fmt::format("{:.{}f} [{:.{}f}-{:.{}f}]", interval["estimate"].get<double>(), decimals,
+                     interval["low"].get<double>(), decimals, interval["high"].get<double>(), decimals);
 }
 
 Interval repeat_run(const Interval& confidence) {
@@ -58,6 +65,12 @@ std::optional<Interval> paired_ratio_interval(const RoundValues& a, const RoundV
     if (auto it = b.find(round); it != b.end() && it->second > 0) ratios.push_back(value / it->second);
   if (ratios.empty()) return std::nullopt;
   return median_interval(std::move(ratios));
+}
+
+void add_frame_ms_intervals(nlohmann::json& doc) {
+  for (auto& point : doc["points"])
+    if (point.contains("samples_ms") && !point["samples_ms"].empty())
+      point["frame_ms_interval"] = interval_json(median_interval(round_values(point)));
 }
 
 }  // namespace bokeh

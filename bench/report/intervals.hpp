@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -23,6 +24,8 @@ struct Interval {
   bool covers(double value) const { return low <= value && value <= high; }
 };
 nlohmann::json interval_json(const Interval& interval);  // {"estimate", "low", "high"}
+// "estimate [low-high]" of an interval_json, `decimals` after the point.
+std::string interval_text(const nlohmann::json& interval, int decimals = 1);
 
 // Where a repeat run on the same machine would put its estimate, at 95%: this run's interval
 // widened by sqrt(2) on each side (the difference of two runs of equal spread has sqrt(2) times
@@ -48,5 +51,10 @@ Interval median_interval(const RoundValues& values);
 // The median over the rounds both have of a / b, with its interval; nullopt when they share no
 // round.
 std::optional<Interval> paired_ratio_interval(const RoundValues& a, const RoundValues& b);
+
+// Every point of a sweep document gets `frame_ms_interval`: its median frame time with the 95%
+// interval above, from its samples (one a round). Written when a sweep ends and by `merge`, so
+// results measured before it exist gain it from their samples.
+void add_frame_ms_intervals(nlohmann::json& doc);
 
 }  // namespace bokeh

@@ -549,11 +549,12 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
     else if (is_number(c, "speedup") && c["speedup"].get<double>() > 0)
       out.push_back(figure(name, "ratio", c["speedup"].get<double>(), nlohmann::json()));
   }
-  // buffers: streamed layers over the full-frame layers, per point (median of same-round ratios).
+  // buffers: streamed layers over the full-frame layers, per point (median of same-round ratios, with
+  // its interval where the run has it).
   for (const auto& p : array("points"))
     if (p.is_object() && p.contains("streamed_vs_full") && is_number(p["streamed_vs_full"], "frame_ms_ratio_median"))
       out.push_back(figure("streamed_over_full/" + p.value("id", "?"), "ratio",
-                           p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(), nlohmann::json()));
+                           p["streamed_vs_full"]["frame_ms_ratio_median"].get<double>(), p["streamed_vs_full"]));
   // ab (the candidate's run): new / old per point, paired, with its Hodges-Lehmann interval.
   for (const auto& r : array("paired_ratios"))
     if (is_number(r, "ratio")) out.push_back(figure("new_over_old/" + r.value("id", "?"), "ratio", r["ratio"].get<double>(), r));

@@ -16,6 +16,7 @@
 #include "accuracy.hpp"
 #include "calibration.hpp"
 #include "coc.hpp"
+#include "intervals.hpp"
 #include "parallel.hpp"
 #include "report.hpp"
 #include "paired.hpp"
@@ -655,6 +656,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   context["power_state"]["end"] = power_state(ctx ? &ctx->info() : nullptr);
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
   const bool complete = record.status == "complete";
+  add_frame_ms_intervals(doc);
   if (s.derive) s.derive(doc);
   add_machine_state(s, context, doc);
   // gbench's own statistics and names, for compare.py.

@@ -231,6 +231,17 @@ TEST(Headlines, ReadFromWhatEachCommandDerives) {
   EXPECT_EQ(h[2].value, 3);
   EXPECT_EQ(run_of(stability, "c", "s").sweep, "stability");  // a run of figures only
   EXPECT_TRUE(headlines_of({{"schema", "bokehbench.tradeoff"}, {"pareto_front", {"a"}}}).empty());
+  // buffers: a streamed point's streamed / full ratio, with its interval where the run has one.
+  h = headlines_of({{"schema", "bokehbench.buffers"},
+                    {"points",
+                     {{{"id", "s"}, {"streamed_vs_full", {{"frame_ms_ratio_median", 1.3}, {"low", 1.2}, {"high", 1.5}, {"rounds", 9}}}},
+                      {{"id", "old"}, {"streamed_vs_full", {{"frame_ms_ratio_median", 1.4}, {"rounds", 5}}}}}}});
+  ASSERT_EQ(h.size(), 2u);
+  for (const HeadlineRow& row : h) {
+    EXPECT_TRUE(row.name == "streamed_over_full/s" || row.name == "streamed_over_full/old") << row.name;
+    EXPECT_EQ(row.low, row.name == "streamed_over_full/s" ? std::optional<double>(1.2) : std::nullopt);
+    EXPECT_EQ(row.high, row.name == "streamed_over_full/s" ? std::optional<double>(1.5) : std::nullopt);
+  }
 }
 
 // A store written before headline figures were stored: read as it is (no figures), and given the
