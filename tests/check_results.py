@@ -57,8 +57,9 @@ def close(a, b):
 
 
 def intervals(d):
-    """Every point's frame_ms_interval is the median of its samples with the order-statistic interval, and
-    (buffers) every streamed/full ratio is the median of the same-round ratios with theirs."""
+    """Every point's frame_ms_interval is the median of its samples with the order-statistic interval,
+    (buffers) every streamed/full ratio is the median of the same-round ratios with theirs, and the run's
+    measurement.noise follows from them."""
     for p in d["points"]:
         got, want = p["frame_ms_interval"], median_interval(p["samples_ms"])
         assert all(close(g, w) for g, w in zip((got["estimate"], got["low"], got["high"]), want)), (p["id"], got, want)
@@ -76,7 +77,16 @@ def intervals(d):
         got = (r["frame_ms_ratio_median"], r["low"], r["high"])
         assert all(close(g, w) for g, w in zip(got, want)) and r["rounds"] == len(same_round), (p["id"], got, want)
         ratios += 1
-    print(len(d["points"]), "points' median intervals and", ratios, "streamed/full ratio intervals check")
+    # The run's noise: the median point's relative half-width, the widest, and the verdict.
+    widths = sorted((p["frame_ms_interval"]["high"] - p["frame_ms_interval"]["low"]) / 2 / p["frame_ms_interval"]["estimate"]
+                    for p in d["points"])
+    noise = d["measurement"]["noise"]
+    median = (widths[(len(widths) - 1) // 2] + widths[len(widths) // 2]) / 2
+    assert close(noise["median_relative_half_width"], median) and close(noise["widest"]["relative_half_width"], widths[-1]), noise
+    assert noise["noisy"] == (median > noise["noisy_above"]), noise
+    assert noise["probe_drift"] == {k: v["drift"] for k, v in d["measurement"]["probes"].items()}, noise
+    print(len(d["points"]), "points' median intervals,", ratios, "streamed/full ratio intervals and the run's noise "
+          f"(+-{100 * median:.1f}%, {'noisy' if noise['noisy'] else 'not noisy'}) check")
 
 
 if __name__ == "__main__":

@@ -541,6 +541,54 @@ void add_machine_state(const SweepSettings& s, const nlohmann::json& context, nl
   }
 }
 
+// How noisy the run was, whatever the command: the probes' drift over the rounds ((max - min) /
+// median) and the half-width of the points' 95% median intervals, relative to the median. Above 10%
+// for the median point, two points 10% apart are not told apart, and the summary says so.
+constexpr double kNoisyHalfWidth = 0.10;
+
+void add_noise(nlohmann::json& doc) {
+  std::vector<double> half_widths;
+  std::string widest_id;
+  double widest = 0;
+  for (const auto& p : doc["points"]) {
+    if (!p.contains("frame_ms_interval")) continue;
+    const auto& t = p["frame_ms_interval"];
+    const double estimate = t["estimate"].get<double>();
+    if (!(estimate > 0)) continue;
+    const double w = (t["high"].get<double>() - t["low"].get<double>()) / 2 / estimate;
+    half_widths.push_back(w);
+    if (w >= widest) widest = w, widest_id = p["id"].get<std::string>();
+  }
+  nlohmann::json drift = nlohmann::json::object();
+  for (const auto& [name, probe] : doc["measurement"]["probes"].items()) drift[name] = probe["drift"];
+  nlohmann::json noise = {{"probe_drift", drift}, {"points", half_widths.size()}, {"noisy_above", kNoisyHalfWidth}};
+  if (!half_widths.empty()) {
+    noise["median_relative_half_width"] = runner::quantile(half_widths, 0.5);
+    noise["widest"] = {{"id", widest_id}, {"relative_half_width", widest}};
+    noise["noisy"] = noise["median_relative_half_width"].get<double>() > kNoisyHalfWidth;
+  }
+  doc["measurement"]["noise"] = noise;
+}
+
+void print_noise(const nlohmann::json& measurement) {
+  if (!measurement.contains("noise") || !measurement["noise"].contains("noisy")) return;
+  const auto& n = measurement["noise"];
+  std::string drift;
+  for (const auto& [name, d] : n["probe_drift"].items())
+    drift += fmt::format("{}{} {:.0f}%", drift.empty() ? "" : ", ", name, 100 * d.get<double>());
+  fmt::print("{}: the points' 95% intervals are +-{:.1f}% of the median for the median point, +-{:.1f}% at the widest "
+             "({}); the probes drifted {} over the rounds{}\n",
+             n["noisy"].get<bool>() ? "NOISY RUN" : "noise", 100 * n["median_relative_half_width"].get<double>(),
+             100 * n["widest"]["relative_half_width"].get<double>(), n["widest"]["id"].get<std::string>(),
+             drift.empty() ? "none measured" : drift,
+             n["noisy"].get<bool>()
+                 ? fmt::format(": two points whose medians differ by less than about {:.0f}% are not told apart by "
+                               "their medians here (ratios paired within rounds cancel the drift a round shares and "
+                               "have intervals of their own)",
+                               200 * n["median_relative_half_width"].get<double>())
+                 : "");
+}
+
 void print_machine_state(const nlohmann::json& measurement) {
   if (!measurement.contains("machine_state")) return;
   const auto& m = measurement["machine_state"];
@@ -657,6 +705,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
   const bool complete = record.status == "complete";
   add_frame_ms_intervals(doc);
+  add_noise(doc);
   if (s.derive) s.derive(doc);
   add_machine_state(s, context, doc);
   // gbench's own statistics and names, for compare.py.
@@ -680,6 +729,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   std::filesystem::remove(files.partial_json);
   std::filesystem::remove(files.gbench_partial);
   if (s.summary) s.summary(doc);
+  print_noise(doc["measurement"]);
   print_machine_state(doc["measurement"]);
   fmt::print("wrote {} and {} ({})\n", files.final_json, files.gbench, duration_text(elapsed_s()));
   if (s.plot && !s.plot_script.empty())
