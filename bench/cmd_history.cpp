@@ -163,7 +163,7 @@ void merge_files(const HistoryOptions& o) {
   std::vector<nlohmann::json> docs;
   for (const auto& f : o.files) docs.push_back(compare::load_results(f));
   nlohmann::json merged = merge_shards(docs, o.files);
-  add_frame_ms_intervals(merged);
+  add_median_intervals(merged);
   // The command's derived figures over all the merged points, by the command's own code (commands.hpp).
   static const std::map<std::string, void (*)(nlohmann::json&)> derivers = {{"bokehbench.figure9", derive_figure9},
                                                                              {"bokehbench.adaptive", derive_adaptive},

@@ -57,13 +57,19 @@ def close(a, b):
 
 
 def intervals(d):
-    """Every point's frame_ms_interval is the median of its samples with the order-statistic interval,
+    """Every point's frame_ms_interval (and each pass's pass_ms_interval) is the median of its samples with the
+    order-statistic interval,
     (buffers) every streamed/full ratio is the median of the same-round ratios with theirs, and the run's
     measurement.noise follows from them."""
     for p in d["points"]:
         got, want = p["frame_ms_interval"], median_interval(p["samples_ms"])
         assert all(close(g, w) for g, w in zip((got["estimate"], got["low"], got["high"]), want)), (p["id"], got, want)
         assert got["low"] <= got["estimate"] <= got["high"], p["id"]
+        assert set(p["pass_ms_interval"]) == set(p.get("samples_pass_ms", {})), p["id"]
+        for name, samples in p.get("samples_pass_ms", {}).items():
+            got = p["pass_ms_interval"][name]
+            want = median_interval(samples)
+            assert all(close(g, w) for g, w in zip((got["estimate"], got["low"], got["high"]), want)), (p["id"], name)
     by_id = {p["id"]: p for p in d["points"]}
     ratios = 0
     for p in d["points"]:
@@ -77,6 +83,9 @@ def intervals(d):
         got = (r["frame_ms_ratio_median"], r["low"], r["high"])
         assert all(close(g, w) for g, w in zip(got, want)) and r["rounds"] == len(same_round), (p["id"], got, want)
         ratios += 1
+    if "shards" in d:  # written by merge: the noise is a run's, and each shard's run is its own
+        print(len(d["points"]), "points' median intervals and", ratios, "streamed/full ratio intervals check (merged)")
+        return
     # The run's noise: the median point's relative half-width, the widest, and the verdict.
     widths = sorted((p["frame_ms_interval"]["high"] - p["frame_ms_interval"]["low"]) / 2 / p["frame_ms_interval"]["estimate"]
                     for p in d["points"])

@@ -704,7 +704,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   context["power_state"]["end"] = power_state(ctx ? &ctx->info() : nullptr);
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
   const bool complete = record.status == "complete";
-  add_frame_ms_intervals(doc);
+  add_median_intervals(doc);
   add_noise(doc);
   if (s.derive) s.derive(doc);
   add_machine_state(s, context, doc);
