@@ -6,8 +6,8 @@ usage: plot_tradeoff.py TRADEOFF_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OU
 x: median frame time (log scale; bars: its 95% interval, frame_ms_interval). y: PSNR against the exact
 energy-sum scatter (higher is better). Colour: method (registry order); marker: intermediate
 precision; hollow markers: intermediates at reduced resolution (marker size shrinks with the
-scale). The
-staircase joins the Pareto front, labelled: for a time budget on the x axis, the best accuracy any
+scale). A
+staircase (one per aperture, each scored against its own shape) joins the Pareto front, labelled: for a time budget on the x axis, the best accuracy any
 configuration offers. Exact results (PSNR infinite) sit on the dotted line at the top.
 """
 
@@ -22,6 +22,11 @@ def short_id(c):
     """The id without what every point of this plot shares (backend, scene, resolution)."""
     parts = c["id"].split("/")
     return "/".join([parts[0]] + parts[4:])
+
+
+def aperture_of(c):
+    """The aperture a point drew (files from before apertures: the disc)."""
+    return c.get("aperture", {}).get("name", "disc")
 
 
 def psnr_of(c, cap):
@@ -49,15 +54,18 @@ def main(doc, prefix):
                     ls="none", mfc=colour if scale == 1 else "none", alpha=0.85)
     ids = {c["id"]: c for c in configs}
     front = [ids[i] for i in doc["pareto_front"] if i in ids]
-    if front:
+    # One staircase per aperture: each is scored against its own shape's exact reference.
+    apertures = list(dict.fromkeys(aperture_of(c) for c in front))
+    for aperture, style in zip(apertures, ["-", "--", ":", "-."] * len(apertures)):
         xs, ys = [], []
-        for c in front:
+        for c in (c for c in front if aperture_of(c) == aperture):
             if xs:
                 xs.append(c["frame_ms"]["median"])
                 ys.append(ys[-1])
             xs.append(c["frame_ms"]["median"])
             ys.append(psnr_of(c, cap))
-        ax.plot(xs, ys, color="black", lw=1.2, alpha=0.6)
+        ax.plot(xs, ys, color="black", lw=1.2, alpha=0.6, ls=style)
+    if front:
         for c in front:
             ax.annotate(f"{short_id(c)}\n{c['frame_ms']['median']:.1f} ms, {psnr_of(c, cap):.1f} dB",
                         (c["frame_ms"]["median"], psnr_of(c, cap)), textcoords="offset points", xytext=(6, -18),
@@ -77,7 +85,9 @@ def main(doc, prefix):
     handles += [Line2D([], [], color="grey", marker="o", mfc="none", ls="none", ms=SIZE.get(s, 5),
                        label=f"intermediates at 1/{s} resolution")
                 for s in sorted({c["buffer_scale"] for c in configs} - {1})]
-    handles.append(Line2D([], [], color="black", alpha=0.6, label="Pareto front"))
+    for aperture, style in zip(apertures, ["-", "--", ":", "-."] * len(apertures)):
+        handles.append(Line2D([], [], color="black", alpha=0.6, ls=style,
+                              label="Pareto front" + (f" ({aperture})" if len(apertures) > 1 else "")))
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="colour / marker")
     ax.set_title(f"Speed vs accuracy: {cfg['scene']} {cfg['width_px']}x{cfg['height_px']}, max CoC {cfg['max_coc_px']} px, "
                  f"patterns {' '.join(cfg['patterns'])}"
