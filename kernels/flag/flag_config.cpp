@@ -15,6 +15,7 @@ FlagConfig flag_config(const FilterOptions& options) {
   const std::string& block = flag_horizontal_blocks().at(options.choice_index("horizontal_block"));
   if (block != "auto") c.horizontal_block = std::stoi(block);
   c.horizontal_bins = options.choice<FlagHorizontalBins>("horizontal_bins");
+  c.vertical_order = options.choice<FlagVerticalOrder>("vertical_order");
   c.adaptive = adaptive_on(options);
   c.adaptive_tile_px = adaptive_tile_px(options);
   c.streamed = options.choice<FlagLayerBuffer>("layer_buffer") == FlagLayerBuffer::streamed;

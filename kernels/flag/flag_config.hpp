@@ -16,6 +16,7 @@ struct FlagConfig {
   int buffer_scale = 1;                       // the 3D buffer at 1/buffer_scale resolution: flag_buffer_scales()
   std::optional<int> horizontal_block;        // pixels per invocation of the GPU horizontal pass; empty: auto
   FlagHorizontalBins horizontal_bins = FlagHorizontalBins::automatic;
+  FlagVerticalOrder vertical_order = FlagVerticalOrder::automatic;
   bool adaptive = false;                      // adaptive = on (coc_tiles_gpu.hpp)
   int adaptive_tile_px = 0;                   // adaptive: the tile-max CoC map's tile side, px of FLAG's grid
   bool streamed = false;                      // layer_buffer = streamed: a ring of rows (flag_gpu.hpp)

@@ -41,6 +41,18 @@ enum class FlagHorizontalBins { automatic, indexed, masked, scan };
 // The binning the pass runs: `bins` as chosen, auto's choice by device and layers.
 FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 
+// The order the vertical pass's workgroups take their tiles, the method's option "vertical_order".
+// A layer row is read twice, by output rows y - j k and y + j k; in "rows" (row-major tiles, as
+// drivers launch workgroups) the rows between those two reads are k n (n + 1) rows of the frame's
+// width, 75 MB of f16 layers at 800x600, N = 153: past the caches, so the second read goes to memory.
+// "columns" walks 8-px column strips top to bottom (tile i = (i / tiles_y, i % tiles_y)), keeping that
+// window at 8 px wide (~750 KB there). Same sums in the same order: the same image bit for bit.
+// "auto": columns on CPU devices (lavapipe, measured in flag_gpu.cpp), rows on GPUs (not measured
+// there: their tiled images and L2 may favour either).
+const std::vector<std::string>& flag_vertical_orders();  // "auto", "rows", "columns"
+enum class FlagVerticalOrder { automatic, rows, columns };
+FlagVerticalOrder flag_vertical_ordering(FlagVerticalOrder order, const vk::DeviceInfo& device);
+
 // Where the horizontal pass leaves the layers for the vertical pass, the method's option
 // "layer_buffer". "full" (the default and the reference): the paper's 3D buffer, one row of layers
 // per row of FLAG's grid. "streamed": a ring of rows. The vertical pass at row y reads only rows

@@ -220,6 +220,12 @@ void declare_flag(std::vector<Method>& methods) {
                 "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU devices such as lavapipe masked up to 21 layers (N = 41), scan "
                 "beyond; indexed on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
                 0, 0, 0, false, flag_horizontal_bins()},
+               {"vertical_order",
+                "flag: the order the GPU vertical pass's workgroups take their tiles. rows: row-major; columns: down "
+                "8-px column strips, so a layer row's second read (by the output row 2 j k below its first) finds it "
+                "in cache; auto: columns on CPU devices such as lavapipe, rows on GPUs. Every order gives the same "
+                "image bit for bit",
+                0, 0, 0, false, flag_vertical_orders()},
                adaptive_option("flag, off: a ceil(N/2)-layer 3D buffer and every pixel's gather over the whole "
                                "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "
                                "GPU when the run is prepared, one int read back), a tile-max CoC map bounding each "

@@ -54,7 +54,9 @@ class FlagShape final : public gpu::GpuFilter {
                                               0, layer_ring_rows(), !table_.halved}),
         vertical_(frame.ctx, vk::spirv("flag/vertical_" + std::string(to_string(config.precision))),
                   std::vector<VkDescriptorType>{kImage, kBuffer}, sizeof(gpu::PassParams),
-                  std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(), !table_.halved}) {
+                  std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(), !table_.halved,
+                                            flag_vertical_ordering(config.vertical_order, frame.ctx.info()) ==
+                                                FlagVerticalOrder::columns}) {
     if (is_bracketed(config.precision) || config.buffer_scale != 1 || config.adaptive)
       throw std::logic_error("make_flag_shape_gpu: a configuration aperture_unsupported refuses");
     check_frame_colour(frame, config.precision);

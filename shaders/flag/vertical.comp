@@ -14,6 +14,9 @@ layout(constant_id = 0) const int LAYERS = 21;
 // Any aperture that is not mirror-symmetric (kernels/flag/flag_shape.hpp): N layers z = dz + n, and
 // row y + j k holds the sources whose chord covers dz = -j: layer n - j. Else layer |j|.
 layout(constant_id = 8) const bool BOTH_HALVES = false;
+// The method's option vertical_order (kernels/flag/flag_gpu.hpp): true, workgroups walk down column
+// strips, so the rows between a layer row's two reads (by rows y -+ j k) stay in cache.
+layout(constant_id = 9) const bool COLUMN_ORDER = false;
 
 layout(binding = 0, LAYER_FORMAT) uniform readonly image3D layers;
 layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
@@ -29,7 +32,14 @@ layout(std430, binding = 3 + BRACKETED) readonly buffer Packed { vec4 packed_inp
 #endif
 
 void main() {
-  const ivec2 p = ivec2(gl_GlobalInvocationID.x, band_row(int(gl_GlobalInvocationID.y)));
+  uvec2 g = gl_GlobalInvocationID.xy;
+  if (COLUMN_ORDER) {
+    // The i-th workgroup launched (row-major, as drivers launch them) takes tile (i / tiles_y, i % tiles_y).
+    const uint launched = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    const uvec2 tile = uvec2(launched / gl_NumWorkGroups.y, launched % gl_NumWorkGroups.y);
+    g = tile * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy;
+  }
+  const ivec2 p = ivec2(g.x, band_row(int(g.y)));
 #if ADAPTIVE
   // Before any invocation returns: D of this pixel's tile (-1 outside the frame), and the largest
   // over the subgroup (uniform).

@@ -81,8 +81,9 @@ TEST_P(GpuMatchesCpu, NaiveAndFlagF32MatchCpuNaive) {
       << "flag, scan bins";
 }
 
-// Every block of outputs per invocation (gather_block, horizontal_block) and the indexed and masked
-// binnings of FLAG's horizontal pass (horizontal_bins) keep each pixel's order of additions, so on the
+// Every block of outputs per invocation (gather_block, horizontal_block), the indexed and masked
+// binnings of FLAG's horizontal pass (horizontal_bins) and either order of its vertical pass's tiles
+// (vertical_order) keep each pixel's order of additions, so on the
 // same packed input the GPU gives the strictly ordered CPU references' image bit for bit:
 // naive_gather_reference, and for f32 layers flag_blur_reference. The scan binning sums in its own
 // order: bit for bit its CPU mirror, flag_horizontal_scan. Run on the packed input the GPU's CoC pass
@@ -101,7 +102,8 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
   };
   const Variant variants[] = {{"naive", "gather_block", naive_gather_blocks()},
                               {"flag", "horizontal_block", flag_horizontal_blocks()},
-                              {"flag", "horizontal_bins", flag_horizontal_bins()}};
+                              {"flag", "horizontal_bins", flag_horizontal_bins()},
+                              {"flag", "vertical_order", flag_vertical_orders()}};
   for (const Variant& v : variants)
     for (std::size_t choice = 0; choice < v.choices.size(); ++choice) {
       FilterOptions o = options_for(v.method, pattern, "f32");
