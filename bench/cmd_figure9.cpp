@@ -252,8 +252,6 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
   const Figures cpu = figures(points, Metric::cpu, target_ratio, target_exponent);
   doc["series"] = wall.series;
   doc["naive_over_flag"] = wall.naive_over_flag;
-  nlohmann::json drift = nlohmann::json::object();
-  for (const auto& [name, probe] : doc["measurement"]["probes"].items()) drift[name] = probe["drift"];
   doc["headlines"] = {
       {"interval", "95%, distribution-free interval of a median from the rounds' order statistics (exact for "
                    "independent rounds); ratios are the median over rounds of naive / FLAG measured back to back in "
@@ -265,7 +263,7 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
       {"settled", wall.unsettled.empty()},
       {"unsettled", wall.unsettled},
       {"stop_reason", doc["measurement"]["stop_reason"]},
-      {"probe_drift", drift},
+      {"probe_drift", probe_drift(doc["measurement"])},
       {"cpu_time", {{"series", cpu.series}, {"naive_over_flag", cpu.naive_over_flag}, {"unsettled", cpu.unsettled}}}};
   add_unclipped_fits(doc);
 }
@@ -312,8 +310,7 @@ void print_summary(const nlohmann::json& doc) {
     fmt::print("settled after {} rounds: {} ({})\n", doc["measurement"]["rounds"].get<int>(), targets, stop);
     return;
   }
-  std::string drift;
-  for (const auto& [name, d] : h["probe_drift"].items()) drift += fmt::format("{}{} {:.0f}%", drift.empty() ? "" : ", ", name, 100 * d.get<double>());
+  const std::string drift = probe_drift_text(h["probe_drift"]);
   fmt::print("NOT SETTLED ({} after {} rounds): the machine was too noisy for these figures at the targets ({}):\n",
              stop, doc["measurement"]["rounds"].get<int>(), targets);
   for (const auto& u : h["unsettled"]) fmt::print("  {}\n", u.get<std::string>());

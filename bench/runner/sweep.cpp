@@ -541,6 +541,24 @@ void add_machine_state(const SweepSettings& s, const nlohmann::json& context, nl
   }
 }
 
+}  // namespace
+
+nlohmann::json probe_drift(const nlohmann::json& measurement) {
+  nlohmann::json drift = nlohmann::json::object();
+  if (measurement.contains("probes"))
+    for (const auto& [name, probe] : measurement["probes"].items()) drift[name] = probe["drift"];
+  return drift;
+}
+
+std::string probe_drift_text(const nlohmann::json& drift) {
+  std::string text;
+  for (const auto& [name, d] : drift.items())
+    text += fmt::format("{}{} {:.0f}%", text.empty() ? "" : ", ", name, 100 * d.get<double>());
+  return text;
+}
+
+namespace {
+
 // How noisy the run was, whatever the command: the probes' drift over the rounds ((max - min) /
 // median) and the half-width of the points' 95% median intervals, relative to the median. Above 10%
 // for the median point, two points 10% apart are not told apart, and the summary says so.
@@ -559,9 +577,7 @@ void add_noise(nlohmann::json& doc) {
     half_widths.push_back(w);
     if (w >= widest) widest = w, widest_id = p["id"].get<std::string>();
   }
-  nlohmann::json drift = nlohmann::json::object();
-  for (const auto& [name, probe] : doc["measurement"]["probes"].items()) drift[name] = probe["drift"];
-  nlohmann::json noise = {{"probe_drift", drift}, {"points", half_widths.size()}, {"noisy_above", kNoisyHalfWidth}};
+  nlohmann::json noise = {{"probe_drift", probe_drift(doc["measurement"])}, {"points", half_widths.size()}, {"noisy_above", kNoisyHalfWidth}};
   if (!half_widths.empty()) {
     noise["median_relative_half_width"] = runner::quantile(half_widths, 0.5);
     noise["widest"] = {{"id", widest_id}, {"relative_half_width", widest}};
@@ -573,9 +589,7 @@ void add_noise(nlohmann::json& doc) {
 void print_noise(const nlohmann::json& measurement) {
   if (!measurement.contains("noise") || !measurement["noise"].contains("noisy")) return;
   const auto& n = measurement["noise"];
-  std::string drift;
-  for (const auto& [name, d] : n["probe_drift"].items())
-    drift += fmt::format("{}{} {:.0f}%", drift.empty() ? "" : ", ", name, 100 * d.get<double>());
+  const std::string drift = probe_drift_text(n["probe_drift"]);
   fmt::print("{}: the points' 95% intervals are +-{:.1f}% of the median for the median point, +-{:.1f}% at the widest "
              "({}); the probes drifted {} over the rounds{}\n",
              n["noisy"].get<bool>() ? "NOISY RUN" : "noise", 100 * n["median_relative_half_width"].get<double>(),

@@ -119,6 +119,11 @@ struct SweepSettings {
   std::function<void(const nlohmann::json& doc)> summary;
 };
 
+// Each calibration probe's drift over the run's rounds ((max - min) / median), by name, from a sweep
+// document's `measurement`; and as text: "cpu_copy 79%, gpu_copy 119%" ("" when none was measured).
+nlohmann::json probe_drift(const nlohmann::json& measurement);
+std::string probe_drift_text(const nlohmann::json& drift);
+
 // Runs the sweep and returns the document written to <out_dir>/<name>.json (with status
 // "complete"), or, interrupted, to <name>.partial.json beside any earlier complete result (and then
 // throws, naming the file).
