@@ -212,12 +212,12 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
 void add_unclipped_fits(nlohmann::json& doc) {
   const auto& config = doc["config"];
   const int width_px = config["width_px"], height_px = config["height_px"], spacing_px = config["spacing_px"];
-  auto share = [&](double n) { return disc_share_in_frame({static_cast<int>(n), spacing_px}, width_px, height_px); };
-  auto exponent_of_share = [&](const std::vector<double>& n) {
+  auto shares_at = [&](const std::vector<double>& n) {
     std::vector<double> shares;
-    for (double x : n) shares.push_back(share(x));
-    return fit_power_law(n, shares).exponent;
+    for (double x : n) shares.push_back(disc_share_in_frame({static_cast<int>(x), spacing_px}, width_px, height_px));
+    return shares;
   };
+  auto exponent_of_share = [&](const std::vector<double>& n) { return fit_power_law(n, shares_at(n)).exponent; };
   for (nlohmann::json* series : {&doc["series"], &doc["headlines"]["cpu_time"]["series"]})
     for (auto& curve : *series) {
       auto& fits = curve["fits"];
@@ -231,11 +231,9 @@ void add_unclipped_fits(nlohmann::json& doc) {
     }
   const std::vector<int> sizes = config["sizes"];
   const std::vector<double> n(sizes.begin(), sizes.end());
-  std::vector<double> shares;
-  for (double x : n) shares.push_back(share(x));
   doc["frame_clipping"] = {
       {"N", sizes},
-      {"share_in_frame", shares},
+      {"share_in_frame", shares_at(n)},
       {"why", "the share of the pattern's largest disc that lands inside the frame, over all its pixels: every "
               "gather skips samples outside the frame, so a tap-bound method's larger-half exponent comes out "
               "below its exponent without frame edges (fits.larger_half_unclipped) by this share's exponent"}};
@@ -268,8 +266,8 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
   add_unclipped_fits(doc);
 }
 
-// "1.23 [1.20, 1.26]": an estimate with the 95% interval in `i` (its low and high).
-std::string interval_text(double estimate, const nlohmann::json& i) {
+// "1.23 [1.20, 1.26]": an exponent with the 95% interval in `i` (its low and high).
+std::string fit_text(double estimate, const nlohmann::json& i) {
   return fmt::format("{:.2f} [{:.2f}, {:.2f}]", estimate, i["low"].get<double>(), i["high"].get<double>());
 }
 
@@ -279,14 +277,14 @@ void print_summary(const nlohmann::json& doc) {
   for (const auto& series : doc["series"]) {
     const auto& f = series["fits"];
     auto exponent = [&](const char* which) {
-      return f.contains(which) ? interval_text(f[which]["exponent"].get<double>(), f[which]) : std::string("-");
+      return f.contains(which) ? fit_text(f[which]["exponent"].get<double>(), f[which]) : std::string("-");
     };
     fmt::print("{:<10} {:<4} {:>22} {:>22} {:>22}\n",
                series["method"].get<std::string>() + series["variant"].get<std::string>(),
                series["backend"].get<std::string>(), exponent("larger_half"), exponent("larger_half_unclipped"),
                exponent("all_sizes"));
     for (const auto& [pass, b] : series["pass_fits_larger_half"].items())
-      fmt::print("{:>15} pass {:<12} {:>22}\n", "", pass, interval_text(b["estimate"].get<double>(), b));
+      fmt::print("{:>15} pass {:<12} {:>22}\n", "", pass, fit_text(b["estimate"].get<double>(), b));
   }
   if (const auto& c = doc["frame_clipping"]; c.contains("larger_half_exponent"))
     fmt::print("unclipped: the frame clips the pattern (share of its disc inside: {:.2f} at N={} .. {:.2f} at N={}, "
