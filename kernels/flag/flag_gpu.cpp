@@ -258,8 +258,12 @@ class Flag final : public gpu::GpuFilter {
     std::vector<std::int32_t> horizontal_constants = {layer_count_, kBracketChunk, pattern_.spacing_px,
                                                       outputs_,     tile_px_,      bins_ == FlagHorizontalBins::masked,
                                                       kFlagScanSegment};
-    // constant_id 9: COLUMN_ORDER (vertical_order), set below once the ring's constant is in.
-    std::vector<std::int32_t> vertical_constants = {layer_count_, tile_px_};
+    // By constant_id: 0 LAYERS, 1 the tile size, 7 LAYER_ROWS (0: the full buffer), 8 BOTH_HALVES (false:
+    // the disc), 9 COLUMN_ORDER (vertical_order); 2-6 are not the vertical pass's.
+    std::vector<std::int32_t> vertical_constants(10, 0);
+    vertical_constants[0] = layer_count_;
+    vertical_constants[1] = tile_px_;
+    vertical_constants[9] = flag_vertical_ordering(config.vertical_order, frame.ctx.info()) == FlagVerticalOrder::columns;
     // Streamed: the ring's rows (constant_id 7, LAYER_ROWS in shaders/flag/layer_rows.glsl; 0: full).
     if (config.streamed && extent_y > 1) {
       const FlagStreamRing ring = flag_stream_ring(
@@ -268,12 +272,8 @@ class Flag final : public gpu::GpuFilter {
       band_rows_ = ring.band_rows;
       extent_y = static_cast<std::uint32_t>(ring.extent.height);
       horizontal_constants.push_back(static_cast<std::int32_t>(extent_y));
-      vertical_constants.resize(7, 0);
-      vertical_constants.push_back(static_cast<std::int32_t>(extent_y));
+      vertical_constants[7] = static_cast<std::int32_t>(extent_y);
     }
-    vertical_constants.resize(9, 0);  // ids 2-6 are not the vertical pass's; 7 LAYER_ROWS (0: full), 8 BOTH_HALVES
-    vertical_constants.push_back(flag_vertical_ordering(config.vertical_order, frame.ctx.info()) ==
-                                 FlagVerticalOrder::columns);
     std::vector<VkDescriptorType> horizontal_bindings = {kBuffer, kImage}, vertical_bindings = {kImage, kBuffer};
     if (bracketed) horizontal_bindings.push_back(kBuffer), vertical_bindings.push_back(kBuffer);
     if (tile_px_ > 0) {
