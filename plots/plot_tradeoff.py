@@ -6,10 +6,11 @@ usage: plot_tradeoff.py TRADEOFF_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OU
 x: median frame time (log scale; bars: its 95% interval, frame_ms_interval). y: PSNR against the exact
 energy-sum scatter (higher is better). Colour: method (registry order); marker: intermediate
 precision; hollow markers: intermediates at reduced resolution (marker size shrinks with the
-scale). A
-staircase (one per aperture, each scored against its own shape) joins the Pareto front, labelled: for a time budget on the x axis, the best accuracy any
-configuration offers. Exact results (PSNR infinite) sit on the dotted line at the top.
+scale). A staircase (one per aperture, each scored against its own shape) joins the Pareto front,
+labelled: for a time budget on the x axis, the best accuracy any configuration offers. Exact results (PSNR infinite) sit on the dotted line at the top.
 """
+
+import itertools
 
 import bokehplot
 import matplotlib.pyplot as plt
@@ -56,7 +57,8 @@ def main(doc, prefix):
     front = [ids[i] for i in doc["pareto_front"] if i in ids]
     # One staircase per aperture: each is scored against its own shape's exact reference.
     apertures = list(dict.fromkeys(aperture_of(c) for c in front))
-    for aperture, style in zip(apertures, ["-", "--", ":", "-."] * len(apertures)):
+    styles = dict(zip(apertures, itertools.cycle(["-", "--", ":", "-."])))
+    for aperture, style in styles.items():
         xs, ys = [], []
         for c in (c for c in front if aperture_of(c) == aperture):
             if xs:
@@ -85,7 +87,7 @@ def main(doc, prefix):
     handles += [Line2D([], [], color="grey", marker="o", mfc="none", ls="none", ms=SIZE.get(s, 5),
                        label=f"intermediates at 1/{s} resolution")
                 for s in sorted({c["buffer_scale"] for c in configs} - {1})]
-    for aperture, style in zip(apertures, ["-", "--", ":", "-."] * len(apertures)):
+    for aperture, style in styles.items():
         handles.append(Line2D([], [], color="black", alpha=0.6, ls=style,
                               label="Pareto front" + (f" ({aperture})" if len(apertures) > 1 else "")))
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="colour / marker")

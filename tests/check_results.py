@@ -57,10 +57,9 @@ def close(a, b):
 
 
 def intervals(d):
-    """Every point's frame_ms_interval (and each pass's pass_ms_interval) is the median of its samples with the
-    order-statistic interval,
-    (buffers) every streamed/full ratio is the median of the same-round ratios with theirs, and the run's
-    measurement.noise follows from them."""
+    """Every point's frame_ms_interval (and each pass's pass_ms_interval) is the median of its samples with
+    the order-statistic interval, (buffers) every streamed/full ratio is the median of the same-round ratios
+    with theirs, and the run's measurement.noise follows from them."""
     for p in d["points"]:
         got, want = p["frame_ms_interval"], median_interval(p["samples_ms"])
         assert all(close(g, w) for g, w in zip((got["estimate"], got["low"], got["high"]), want)), (p["id"], got, want)
