@@ -6,10 +6,13 @@
 // (intervals.hpp), and the run measures until every one is as tight as asked (--target-ratio-pct,
 // --target-exponent) or the budget is spent, then says which. Naive and FLAG at one N are visited
 // back to back in every round, taking turns going first, so each round gives one paired ratio.
+// Where the CPU does the work (the CPU references; the GPU backend on lavapipe) the figures are in
+// process CPU time, as `ab` compares there; on a real GPU in wall-clock time (cpu_time_leads).
 #include <algorithm>
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "commands.hpp"
 #include "gather_pattern.hpp"
@@ -33,19 +36,33 @@ struct Figure9Options {
   std::vector<std::string> sweep_choices;  // method options measured at every one of their choices
 };
 
+// Whether a backend's figures are taken in process CPU time: where the CPU does the work (the CPU
+// references, and the GPU backend on a CPU device such as lavapipe) that is the work done, which a
+// process competing for the cores inflates far less than wall-clock time. Re-derived from the
+// samples of four default runs of 5b9ceb2 on a 2-core VM (two alone, two at once), the 18 figures
+// agreed between the six pairs of runs 76 times in CPU time and 64 in wall-clock time (the two
+// loaded runs: 16 and 11 of 18), and 38 against 25 settled at the targets. On a real GPU the
+// process's CPU time is host overhead: wall-clock there. (`ab` chooses its clock the same way.)
+bool cpu_time_leads(const std::string& backend, const nlohmann::json& device) {
+  return backend == "cpu" || device.is_null() || device.value("type", std::string()) == "cpu";
+}
+
+const char* time_name(bool cpu_time) { return cpu_time ? "process CPU time" : "wall-clock time"; }
+
 // One measured point's samples by round: what every figure below is drawn from.
 struct RoundPoint {
   std::string method, variant, backend;  // variant: options off their defaults (sweep.cpp), "" for none
   int n = 0;
+  bool cpu_time_leads = false;                  // its figures are in cpu_ms (cpu_time_leads())
   RoundValues wall_ms, cpu_ms;                   // the frame's wall-clock time; the process CPU time per frame
   std::map<std::string, RoundValues> pass_ms;   // GPU: per pass (Vulkan timestamps)
 };
 
-std::vector<RoundPoint> round_points(const nlohmann::json& points) {
+std::vector<RoundPoint> round_points(const nlohmann::json& points, const nlohmann::json& device) {
   std::vector<RoundPoint> out;
   for (const auto& p : points) {
-    RoundPoint r{p["method"], p.value("variant", ""), p["backend"], p["N"].get<int>(), round_values(p),
-                 round_values(p, "samples_cpu_ms"), {}};
+    RoundPoint r{p["method"], p.value("variant", ""), p["backend"], p["N"].get<int>(),
+                 cpu_time_leads(p["backend"], device), round_values(p), round_values(p, "samples_cpu_ms"), {}};
     for (const auto& [pass, values] : p["samples_pass_ms"].items())
       for (std::size_t s = 0; s < values.size(); ++s) r.pass_ms[pass][p["sample_rounds"][s].get<int>()] = values[s].get<double>();
     out.push_back(std::move(r));
@@ -53,13 +70,14 @@ std::vector<RoundPoint> round_points(const nlohmann::json& points) {
   return out;
 }
 
-std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, const runner::RunRecord& record) {
+std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, const runner::RunRecord& record,
+                                     const nlohmann::json& device) {
   std::vector<RoundPoint> out;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const runner::PointRecord& rec = record.points[i];
     if (rec.samples.empty() || !rec.skipped.empty()) continue;
     RoundPoint r{points[i].method->name, points[i].variant, points[i].backend, points[i].options.pattern.size_n,
-                 {}, {}, {}};
+                 cpu_time_leads(points[i].backend, device), {}, {}, {}};
     for (std::size_t s = 0; s < rec.samples.size(); ++s) {
       r.wall_ms[rec.sample_round[s]] = rec.samples[s].frame_ms;
       r.cpu_ms[rec.sample_round[s]] = rec.samples[s].cpu_ms;
@@ -69,7 +87,8 @@ std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, cons
   return out;
 }
 
-enum class Metric { wall, cpu };
+// lead: each point in its backend's time (cpu_time_leads); wall: wall-clock time for every point.
+enum class Metric { lead, wall };
 
 // The figures of one metric with their intervals: per method, variant and backend (registry order,
 // GPU first) the medians (with their points' median relative IQR) and the growth exponents over all
@@ -87,7 +106,10 @@ std::string point_key(const std::string& method, const std::string& variant, con
   return fmt::format("{}|{}|{}|{}", method, variant, backend, n);
 }
 
-const RoundValues& values_of(const RoundPoint& p, Metric metric) { return metric == Metric::wall ? p.wall_ms : p.cpu_ms; }
+const RoundValues& values_of(const RoundPoint& p, Metric metric) {
+  return metric == Metric::lead && p.cpu_time_leads ? p.cpu_ms : p.wall_ms;
+}
+const char* time_of(const RoundPoint& p, Metric metric) { return time_name(metric == Metric::lead && p.cpu_time_leads); }
 
 // The growth exponent of `curve` (one point per n) over its points from `from` on: fitted to each
 // round's own curve, then the median over rounds. A round's points are measured within seconds of
@@ -139,7 +161,7 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
                   {"N", std::vector<double>(n.begin() + at, n.end())}};
   }
   nlohmann::json pass_fits = nlohmann::json::object();
-  if (metric == Metric::wall && !headlines_only && n.size() - half >= 2)
+  if (metric == Metric::lead && !headlines_only && n.size() - half >= 2)  // timestamps: one kind of time
     for (const auto& [pass, unused] : pts.front()->pass_ms) {
       std::vector<const RoundValues*> pass_curve;
       for (const auto* p : pts)
@@ -176,7 +198,7 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
               out.needed.insert(point_key(pts[i]->method, pts[i]->variant, pts[i]->backend, pts[i]->n));
           }
         }
-        curve.update({{"method", m.name}, {"variant", variant}, {"backend", backend}});
+        curve.update({{"method", m.name}, {"variant", variant}, {"backend", backend}, {"time", time_of(*pts.front(), metric)}});
         out.series.push_back(std::move(curve));
       }
   // The paper's comparison: both at their defaults.
@@ -188,7 +210,8 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
       const Interval r = paired_ratio_interval(values_of(a, metric), values_of(b, metric)).value_or(Interval{});
       const bool settled = r.relative_half_width() <= target_ratio;
       const Interval repeat = repeat_run(r);
-      out.naive_over_flag.push_back({{"N", a.n}, {"backend", a.backend}, {"naive_over_flag", r.estimate},
+      out.naive_over_flag.push_back({{"N", a.n}, {"backend", a.backend}, {"time", time_of(a, metric)},
+                                     {"naive_over_flag", r.estimate},
                                      {"low", r.low}, {"high", r.high}, {"repeat_low", repeat.low},
                                      {"repeat_high", repeat.high}, {"settled", settled}});
       if (!settled) {
@@ -218,7 +241,7 @@ void add_unclipped_fits(nlohmann::json& doc) {
     return shares;
   };
   auto exponent_of_share = [&](const std::vector<double>& n) { return fit_power_law(n, shares_at(n)).exponent; };
-  for (nlohmann::json* series : {&doc["series"], &doc["headlines"]["cpu_time"]["series"]})
+  for (nlohmann::json* series : {&doc["series"], &doc["headlines"]["wall_time"]["series"]})
     for (auto& curve : *series) {
       auto& fits = curve["fits"];
       if (!fits.contains("larger_half")) continue;
@@ -241,15 +264,14 @@ void add_unclipped_fits(nlohmann::json& doc) {
     doc["frame_clipping"]["larger_half_exponent"] = exponent_of_share(larger);
 }
 
-// The document's figures: wall-clock time (what a user waits for) leads; the same figures in
-// process CPU time follow (on lavapipe and the CPU references that is the work done, which other
-// processes on the cores inflate less). The probes' drift says how steady the machine was.
+// The document's figures, each backend's in its time (cpu_time_leads), and the same in wall-clock time
+// (what a user waits for). The probes' drift says how steady the machine was.
 void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
-  const std::vector<RoundPoint> points = round_points(doc["points"]);
+  const std::vector<RoundPoint> points = round_points(doc["points"], doc.at("context").value("device", nlohmann::json()));
+  const Figures lead = figures(points, Metric::lead, target_ratio, target_exponent);
   const Figures wall = figures(points, Metric::wall, target_ratio, target_exponent);
-  const Figures cpu = figures(points, Metric::cpu, target_ratio, target_exponent);
-  doc["series"] = wall.series;
-  doc["naive_over_flag"] = wall.naive_over_flag;
+  doc["series"] = lead.series;
+  doc["naive_over_flag"] = lead.naive_over_flag;
   doc["headlines"] = {
       {"interval", "95%, distribution-free interval of a median from the rounds' order statistics (exact for "
                    "independent rounds); ratios are the median over rounds of naive / FLAG measured back to back in "
@@ -258,11 +280,11 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
                           "(the interval widened by sqrt(2)); a repeat run's estimate falls in the plain 95% interval "
                           "only about 83% of the time"},
       {"targets", {{"ratio_relative_half_width", target_ratio}, {"exponent_half_width", target_exponent}}},
-      {"settled", wall.unsettled.empty()},
-      {"unsettled", wall.unsettled},
+      {"settled", lead.unsettled.empty()},
+      {"unsettled", lead.unsettled},
       {"stop_reason", doc["measurement"]["stop_reason"]},
       {"probe_drift", probe_drift(doc["measurement"])},
-      {"cpu_time", {{"series", cpu.series}, {"naive_over_flag", cpu.naive_over_flag}, {"unsettled", cpu.unsettled}}}};
+      {"wall_time", {{"series", wall.series}, {"naive_over_flag", wall.naive_over_flag}, {"unsettled", wall.unsettled}}}};
   add_unclipped_fits(doc);
 }
 
@@ -272,6 +294,14 @@ std::string fit_text(double estimate, const nlohmann::json& i) {
 }
 
 void print_summary(const nlohmann::json& doc) {
+  std::map<std::string, std::set<std::string>> backends;  // the time figures are in -> the backends in it
+  for (const auto& series : doc["series"]) backends[series.value("time", time_name(false))].insert(series["backend"]);
+  std::vector<std::string> times;
+  for (const auto& [time, in] : backends) times.push_back(fmt::format("{} ({})", time, fmt::join(in, ", ")));
+  fmt::print("\nfigures in {}", fmt::join(times, "; "));
+  if (backends.count(time_name(true)))
+    fmt::print(": the work done on the cores, which a competing process inflates less than wall-clock time (each "
+               "ratio's wall-clock figure follows it; headlines.wall_time has them all)");
   fmt::print("\n{:<10} {:<4} {:>22} {:>22} {:>22}   (growth exponent b of t ~ N^b, 95% intervals)\n", "method",
              "on", "larger half of N", "same, unclipped", "all N");
   for (const auto& series : doc["series"]) {
@@ -293,11 +323,18 @@ void print_summary(const nlohmann::json& doc) {
                c["share_in_frame"].front().get<double>(), c["N"].front().get<int>(),
                c["share_in_frame"].back().get<double>(), c["N"].back().get<int>(),
                c["larger_half_exponent"].get<double>());
-  for (const auto& r : doc["naive_over_flag"])
-    fmt::print("naive / FLAG at N={:<3} ({}): {:.2f}x [{:.2f}, {:.2f}]  a repeat run: [{:.2f}, {:.2f}]\n",
+  const auto& wall_ratios = doc["headlines"]["wall_time"]["naive_over_flag"];
+  for (std::size_t i = 0; i < doc["naive_over_flag"].size(); ++i) {
+    const auto& r = doc["naive_over_flag"][i];
+    fmt::print("naive / FLAG at N={:<3} ({}): {:.2f}x [{:.2f}, {:.2f}]  a repeat run: [{:.2f}, {:.2f}]",
                r["N"].get<int>(), r["backend"].get<std::string>(), r["naive_over_flag"].get<double>(),
                r["low"].get<double>(), r["high"].get<double>(), r["repeat_low"].get<double>(),
                r["repeat_high"].get<double>());
+    if (const auto& w = wall_ratios[i]; r.value("time", "") == time_name(true))
+      fmt::print("  wall-clock: {:.2f}x [{:.2f}, {:.2f}]", w["naive_over_flag"].get<double>(), w["low"].get<double>(),
+                 w["high"].get<double>());
+    fmt::print("\n");
+  }
   const auto& h = doc["headlines"];
   const auto& t = h["targets"];
   const std::string targets = fmt::format("every ratio within +-{:.0f}%, every larger-half exponent within +-{:.2f}",
@@ -368,10 +405,13 @@ void figure9(Figure9Options& o) {
   // than it is, the more so the fewer rounds it has (measured with the bootstrap intervals used before:
   // leaving from 5 rounds on, two default runs agreed on 14 of 18 figures and their 95% intervals
   // covered each other for 10 of 18).
-  s.points_needed = [&points, target_ratio, target_exponent](const runner::RunRecord& record) {
+  s.points_needed = [&points, target_ratio, target_exponent](const runner::RunRecord& record,
+                                                              const nlohmann::json& context) {
     if (record.round_order.size() < 10) return std::vector<bool>(points.size(), true);
     const std::set<std::string> needed =
-        figures(round_points(points, record), Metric::wall, target_ratio, target_exponent, true).needed;
+        figures(round_points(points, record, context.value("device", nlohmann::json())), Metric::lead, target_ratio,
+                target_exponent, true)
+            .needed;
     std::vector<bool> out;
     for (const auto& p : points)
       out.push_back(needed.count(point_key(p.method->name, p.variant, p.backend, p.options.pattern.size_n)) > 0);

@@ -5,6 +5,8 @@ usage: plot_figure9.py FIGURE9_JSON OUT_PREFIX
   writes OUT_PREFIX.png/.svg: the paper's figure, naive gather vs FLAG;
   and OUT_PREFIX_methods.png/.svg when the run measured other methods too.
 
+Where the CPU does the work (lavapipe, the CPU references) the times are process CPU time (the cores'
+work per frame, which a competing process inflates less than wall-clock), else wall-clock; the axes say which.
 The paper's figure has one row per backend (GPU and CPU times differ by orders of magnitude on a
 real GPU, so each gets its own axes): frame time on linear axes, as in the paper; the same on log-log
 axes, where a power law is a straight line and the fitted exponent (legend) its slope; and naive /
@@ -51,6 +53,12 @@ def size_axis(ax, cfg, log):
         ax.xaxis.set_minor_locator(NullLocator())
 
 
+def time_of(doc, backend):
+    """What a backend's figures are in: process CPU time where the CPU does the work (all cores' work per
+    frame, about cores x wall-clock when they are busy), else wall-clock (cmd_figure9.cpp: cpu_time_leads)."""
+    return next((s.get("time") for s in doc["series"] if s["backend"] == backend), None) or "wall-clock time"
+
+
 def where(doc, backend):
     device = (doc["context"].get("device") or {}).get("name", "")
     return f"GPU ({device})" if backend == "gpu" else "CPU references"
@@ -64,7 +72,7 @@ def paper_figure(doc, prefix, backends, colours):
         for ax, log in zip(row[:2], (False, True)):
             draw_curves(ax, doc, backend, PAPER, colours)
             size_axis(ax, cfg, log)
-            ax.set_ylabel("frame time (ms): median, 95% interval")
+            ax.set_ylabel(f"frame time ({time_of(doc, backend)}, ms): median, 95% interval")
             if log:
                 ax.set_yscale("log")
                 ax.yaxis.set_major_formatter(ScalarFormatter())
@@ -86,7 +94,7 @@ def paper_figure(doc, prefix, backends, colours):
             ax.legend(fontsize=8, loc="upper left")
         size_axis(ax, cfg, False)
         ax.set_ylim(bottom=0)
-        ax.set_ylabel("naive frame time / FLAG frame time")
+        ax.set_ylabel(f"naive / FLAG frame time ({time_of(doc, backend)})")
         ax.set_title(f"{where(doc, backend)}: FLAG's speed-up over the naive gather", fontsize=9)
     h = doc.get("headlines", {})
     verdict = "settled" if h.get("settled") else f"NOT settled ({h.get('stop_reason', '')})"
@@ -104,7 +112,7 @@ def methods_figure(doc, prefix, backends, colours):
         size_axis(ax, cfg, False)
         ax.set_yscale("log")
         ax.yaxis.set_major_formatter(ScalarFormatter())
-        ax.set_ylabel("frame time (ms, log): median, 95% interval")
+        ax.set_ylabel(f"frame time ({time_of(doc, backend)}, ms, log): median, 95% interval")
         ax.set_title(f"{where(doc, backend)}: every method measured", fontsize=9)
         ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"{cfg['scene']} {cfg['width_px']}x{cfg['height_px']}: {bokehplot.context_line(doc)}", fontsize=9)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Checks on a command's results file beyond its JSON schema: what the schema cannot say.
 
-usage: check_results.py gbench|adaptive|injected|intervals FILE
+usage: check_results.py gbench|adaptive|injected|intervals|figure9 FILE
 """
 import json
 import math
@@ -97,8 +97,40 @@ def intervals(d):
           f"(+-{100 * median:.1f}%, {'noisy' if noise['noisy'] else 'not noisy'}) check")
 
 
+def figure9(d):
+    """Each backend's figures are in the time the CPU's share of the work calls for (process CPU time for the CPU
+    references and on a CPU device such as lavapipe, else wall-clock; headlines.wall_time always wall-clock), and
+    each naive/FLAG ratio and curve median is recomputed here from the points' samples in that time: the median of
+    the ratios within each round with its order-statistic interval, and the repeat-run interval sqrt(2) wider."""
+    software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
+    field = {"process CPU time": "samples_cpu_ms", "wall-clock time": "samples_ms"}
+    points = {(p["method"], p["backend"], p["N"]): p for p in d["points"] if not p.get("variant")}
+    checked = 0
+    for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
+        for r in figures["naive_over_flag"]:
+            want_time = "process CPU time" if lead and (r["backend"] == "cpu" or software) else "wall-clock time"
+            assert r["time"] == want_time, (r, want_time)
+            a, b = (points[(m, r["backend"], r["N"])] for m in ("naive", "flag"))
+            b_ms = dict(zip(b["sample_rounds"], b[field[r["time"]]]))
+            paired = [ms / b_ms[k] for k, ms in zip(a["sample_rounds"], a[field[r["time"]]]) if k in b_ms]
+            est, low, high = median_interval(paired)
+            assert all(close(g, w) for g, w in zip((r["naive_over_flag"], r["low"], r["high"]), (est, low, high))), (r, est)
+            assert close(r["repeat_low"], est - math.sqrt(2) * (est - low)), r
+            assert close(r["repeat_high"], est + math.sqrt(2) * (high - est)), r
+            checked += 1
+        for s in figures["series"]:
+            if s.get("variant"):
+                continue
+            for n, median in zip(s["N"], s["median_ms"]):
+                p = points[(s["method"], s["backend"], int(n))]
+                assert close(median, median_interval(p[field[s["time"]]])[0]), (s["method"], s["backend"], n)
+    assert checked, "no naive/FLAG ratio to check"
+    print(checked, "naive/FLAG ratios and the curves' medians check against the samples, in",
+          sorted({s["time"] + " (" + s["backend"] + ")" for s in d["series"]}))
+
+
 if __name__ == "__main__":
-    checks = {"gbench": gbench, "adaptive": adaptive, "injected": injected, "intervals": intervals}
+    checks = {"gbench": gbench, "adaptive": adaptive, "injected": injected, "intervals": intervals, "figure9": figure9}
     if len(sys.argv) != 3 or sys.argv[1] not in checks:
         sys.exit(__doc__)
     with open(sys.argv[2]) as f:

@@ -529,16 +529,21 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
       if (p.contains("ms") && is_number(p["ms"], "median"))
         out.push_back(figure("probe/" + probe, "ms", p["ms"]["median"].get<double>(), nlohmann::json()));
   // figure9: naive / FLAG per N and backend (paired within rounds), each curve's growth exponents.
+  // Figures in process CPU time are series of their own ("/cpu_time"): older runs took them in
+  // wall-clock time, and one series mixing the two would show the switch as a change.
+  auto in_time = [](const nlohmann::json& figure) {
+    return figure.value("time", std::string()) == "process CPU time" ? std::string("/cpu_time") : std::string();
+  };
   for (const auto& r : array("naive_over_flag"))
     if (is_number(r, "naive_over_flag"))
-      out.push_back(figure(fmt::format("naive_over_flag/{}/N:{}", r.value("backend", "?"), r.value("N", 0)), "ratio",
-                           r["naive_over_flag"].get<double>(), r));
+      out.push_back(figure(fmt::format("naive_over_flag/{}/N:{}{}", r.value("backend", "?"), r.value("N", 0), in_time(r)),
+                           "ratio", r["naive_over_flag"].get<double>(), r));
   for (const auto& c : array("series"))
     if (c.is_object() && c.contains("fits") && c["fits"].is_object())
       for (const auto& [fit, f] : c["fits"].items())
         if (is_number(f, "exponent"))
-          out.push_back(figure(fmt::format("exponent/{}{}/{}/{}", c.value("method", "?"), c.value("variant", ""),
-                                           c.value("backend", "?"), fit),
+          out.push_back(figure(fmt::format("exponent/{}{}/{}/{}{}", c.value("method", "?"), c.value("variant", ""),
+                                           c.value("backend", "?"), fit, in_time(c)),
                                "exponent", f["exponent"].get<double>(), f));
   // adaptive: off / on per configuration, paired within rounds when the run has it.
   for (const auto& c : array("comparisons")) {

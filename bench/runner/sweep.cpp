@@ -702,7 +702,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     std::map<std::string, std::size_t> blocks;
     for (const auto& p : points) hooks.visit_block.push_back(blocks.emplace(s.visit_block(p), blocks.size()).first->second);
   }
-  hooks.points_needed = s.points_needed;
+  if (s.points_needed)
+    hooks.points_needed = [&](const runner::RunRecord& record) { return s.points_needed(record, context); };
 
   fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),
              measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
@@ -717,6 +718,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   }
   context["power_state"]["end"] = power_state(ctx ? &ctx->info() : nullptr);
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
+  doc["context"] = context;  // derive reads the device, as merge does from a file
   const bool complete = record.status == "complete";
   add_median_intervals(doc);
   add_noise(doc);

@@ -111,8 +111,9 @@ struct SweepSettings {
   // Groups visited one after another in every round (runner::Hooks::visit_block): those whose points'
   // keys are equal. Empty: every group on its own.
   std::function<std::string(const SweepPoint&)> visit_block;
-  // Which points a figure still too wide needs (runner::Hooks::points_needed); empty: all of them.
-  std::function<std::vector<bool>(const runner::RunRecord&)> points_needed;
+  // Which points a figure still too wide needs (runner::Hooks::points_needed), given the run's
+  // context (its device); empty: all of them.
+  std::function<std::vector<bool>(const runner::RunRecord&, const nlohmann::json& context)> points_needed;
   // Adds the command's derived results (fits, ratios, Pareto front) to the document.
   std::function<void(nlohmann::json& doc)> derive;
   // Prints the command's summary from the finished document.

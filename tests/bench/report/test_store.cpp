@@ -188,13 +188,14 @@ TEST(Headlines, ReadFromWhatEachCommandDerives) {
   const nlohmann::json figure9 = {
       {"schema", "bokehbench.figure9"},
       {"naive_over_flag", {{{"N", 9}, {"backend", "gpu"}, {"naive_over_flag", 0.75}, {"low", 0.73}, {"high", 0.77}}}},
-      {"series", {{{"method", "flag"}, {"variant", ""}, {"backend", "cpu"},
+      {"series", {{{"method", "flag"}, {"variant", ""}, {"backend", "cpu"}, {"time", "process CPU time"},
                    {"fits", {{"larger_half", {{"exponent", 1.1}, {"low", 1.0}, {"high", 1.2}}}}}}}}};
   auto h = headlines_of(figure9);
   ASSERT_EQ(h.size(), 2u);
-  EXPECT_EQ(h[0].name, "naive_over_flag/gpu/N:9");
+  EXPECT_EQ(h[0].name, "naive_over_flag/gpu/N:9");  // no time: a run from before CPU time led (wall-clock)
   EXPECT_EQ(*h[0].high, 0.77);
-  EXPECT_EQ(h[1].name, "exponent/flag/cpu/larger_half");
+  // Figures in process CPU time are series of their own, apart from the older wall-clock ones.
+  EXPECT_EQ(h[1].name, "exponent/flag/cpu/larger_half/cpu_time");
   EXPECT_EQ(h[1].unit, "exponent");
   const nlohmann::json adaptive = {{"schema", "bokehbench.adaptive"},
                                    {"comparisons", {{{"off_id", "naive/a"}, {"speedup", 9.0},
