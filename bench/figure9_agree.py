@@ -13,14 +13,20 @@ import json
 import sys
 
 
+def in_time(figure):
+    """A figure in process CPU time is named so (figure9 takes lavapipe's and the CPU references' figures in it);
+    one in wall-clock time, or from a run before figures had a time, is not: the two are different figures."""
+    return " (CPU time)" if figure.get("time") == "process CPU time" else ""
+
+
 def headlines(doc):
     out = {}
     for s in doc["series"]:
         fit = s["fits"].get("larger_half")
         if fit:
-            out[f"exponent {s['method']} {s['backend']}"] = (fit["exponent"], fit, "abs", 0.1)
+            out[f"exponent {s['method']} {s['backend']}{in_time(s)}"] = (fit["exponent"], fit, "abs", 0.1)
     for r in doc["naive_over_flag"]:
-        out[f"naive/FLAG {r['backend']} N={r['N']}"] = (r["naive_over_flag"], r, "rel", 0.10)
+        out[f"naive/FLAG {r['backend']} N={r['N']}{in_time(r)}"] = (r["naive_over_flag"], r, "rel", 0.10)
     return out
 
 
@@ -32,7 +38,7 @@ def repeat(interval):
 def main(a_path, b_path):
     a, b = (headlines(json.load(open(p))) for p in (a_path, b_path))
     failures = plain_covered = 0
-    print(f"{'figure':<26} {'A [repeat run]':>22} {'B [repeat run]':>22} {'difference':>11}  covered  "
+    print(f"{'figure':<37} {'A [repeat run]':>22} {'B [repeat run]':>22} {'difference':>11}  covered  "
           f"95% covered  verdict")
     for key in sorted(set(a) & set(b)):
         (ea, ia, kind, limit), (eb, ib, _, _) = a[key], b[key]
@@ -44,7 +50,7 @@ def main(a_path, b_path):
         ok = diff <= limit and covered
         failures += not ok
         shown = f"{diff:.3f}" if kind == "abs" else f"{100 * diff:.1f}%"
-        print(f"{key:<26} {ea:>7.3f} [{la:.3f}, {ha:.3f}] {eb:>7.3f} [{lb:.3f}, {hb:.3f}] {shown:>11}  "
+        print(f"{key:<37} {ea:>7.3f} [{la:.3f}, {ha:.3f}] {eb:>7.3f} [{lb:.3f}, {hb:.3f}] {shown:>11}  "
               f"{'both' if covered else 'no':<7}  {'both' if plain else 'no':<11}  {'agree' if ok else 'DIFFER'}")
     missing = set(a) ^ set(b)
     if missing:

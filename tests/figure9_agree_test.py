@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """bench/figure9_agree.py on a real figure9 result: a run agrees with itself; a copy whose first
-naive/FLAG ratio (with its interval) moved by 20%, or whose first exponent moved by 0.2, does not.
+naive/FLAG ratio (with its interval) moved by 20%, or whose first exponent moved by 0.2, does not; nor do
+figures taken in another time (process CPU time against wall-clock).
 
 usage: figure9_agree_test.py AGREE_SCRIPT FIGURE9_JSON SCRATCH_DIR
 """
@@ -37,4 +38,9 @@ for key in ("exponent", "low", "high", "repeat_low", "repeat_high"):
         fit[key] += 0.2
 r = agree(moved_exponent)
 assert r.returncode == 1 and "DIFFER" in r.stdout, r.stdout
-print("figure9_agree: self agrees; a 20% ratio shift and a 0.2 exponent shift are told apart")
+other_time = copy.deepcopy(doc)
+for s in other_time["series"]:
+    s["time"] = "wall-clock time" if s["time"] == "process CPU time" else "process CPU time"
+r = agree(other_time)
+assert r.returncode == 1 and "in one run only" in r.stdout, r.stdout
+print("figure9_agree: self agrees; a 20% ratio shift, a 0.2 exponent shift and figures in another time are told apart")
