@@ -47,7 +47,7 @@ bool cpu_time_leads(const std::string& backend, const nlohmann::json& device) {
   return backend == "cpu" || device.is_null() || device.value("type", std::string()) == "cpu";
 }
 
-const char* time_name(bool cpu_time) { return cpu_time ? "process CPU time" : "wall-clock time"; }
+const char* time_name(bool cpu_time) { return cpu_time ? kProcessCpuTime : kWallClockTime; }
 
 // One measured point's samples by round: what every figure below is drawn from.
 struct RoundPoint {

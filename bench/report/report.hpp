@@ -14,6 +14,10 @@ namespace bokeh {
 // Bumped when a key changes meaning or disappears; adding keys keeps the version.
 constexpr int kSchemaVersion = 2;  // 2: one point format for every sweep (bench/runner/sweep.cpp)
 
+// What a figure's times are, as results files name it (`time` on figure9's curves and ratios).
+inline constexpr const char* kProcessCpuTime = "process CPU time";
+inline constexpr const char* kWallClockTime = "wall-clock time";
+
 // Device, driver, machine and build: what a reader needs to trust or compare a number.
 // Includes power_state.start (see power_state()).
 nlohmann::json run_context(const vk::DeviceInfo* device);

@@ -13,6 +13,7 @@
 #include <pqxx/pqxx>
 #endif
 
+#include "report.hpp"
 #include "runner.hpp"
 
 namespace bokeh::history {
@@ -532,7 +533,7 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
   // Figures in process CPU time are series of their own ("/cpu_time"): older runs took them in
   // wall-clock time, and one series mixing the two would show the switch as a change.
   auto in_time = [](const nlohmann::json& figure) {
-    return figure.value("time", std::string()) == "process CPU time" ? std::string("/cpu_time") : std::string();
+    return figure.value("time", std::string()) == kProcessCpuTime ? std::string("/cpu_time") : std::string();
   };
   for (const auto& r : array("naive_over_flag"))
     if (is_number(r, "naive_over_flag"))
