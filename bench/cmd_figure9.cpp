@@ -335,6 +335,17 @@ void print_summary(const nlohmann::json& doc) {
                  w["high"].get<double>());
     fmt::print("\n");
   }
+  // The ratios move with the machine's memory speed (README, "Do two runs agree?"): say what it was.
+  if (const auto& limits = doc["measurement"].value("limits", nlohmann::json::object());
+      limits.contains("gpu_copy_gb_per_s") || limits.contains("cpu_copy_gb_per_s")) {
+    std::vector<std::string> rates;
+    for (const auto& [probe, name] : {std::pair{"gpu_copy_gb_per_s", "GPU"}, std::pair{"cpu_copy_gb_per_s", "CPU"}})
+      if (limits.contains(probe)) rates.push_back(fmt::format("{} copy {:.1f} GB/s", name, limits[probe].get<double>()));
+    fmt::print("memory in this run: {} (each probe's median over the rounds). FLAG's layers are memory traffic where "
+               "naive's gather mostly hits cache, so a run in a slower memory phase can give lower naive/FLAG ratios: "
+               "compare runs at like rates\n",
+               fmt::join(rates, ", "));
+  }
   const auto& h = doc["headlines"];
   const auto& t = h["targets"];
   const std::string targets = fmt::format("every ratio within +-{:.0f}%, every larger-half exponent within +-{:.2f}",
