@@ -42,9 +42,10 @@ struct Figure9Options {
 // samples of four default runs of 5b9ceb2 on a 2-core VM (two alone, two at once), the 18 figures
 // agreed between the six pairs of runs 76 times in CPU time and 64 in wall-clock time (the two
 // loaded runs: 16 and 11 of 18), and 38 against 25 settled at the targets. On a real GPU the
-// process's CPU time is host overhead: wall-clock there. (`ab` chooses its clock the same way.)
+// process's CPU time is host overhead: wall-clock there. (`ab` and `compare` choose their clock by the
+// same is_cpu_device.)
 bool cpu_time_leads(const std::string& backend, const nlohmann::json& device) {
-  return backend == "cpu" || device.is_null() || device.value("type", std::string()) == "cpu";
+  return backend == "cpu" || is_cpu_device(device);
 }
 
 const char* time_name(bool cpu_time) { return cpu_time ? kProcessCpuTime : kWallClockTime; }

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "report.hpp"
 #include "text_file.hpp"
 
 namespace bokeh::compare {
@@ -589,7 +590,7 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
   // The clock: CPU time where the device is the CPU and both files recorded it, else wall.
   if (options.times != "auto" && options.times != "wall" && options.times != "cpu")
     throw std::invalid_argument("--times is auto, wall or cpu, not '" + options.times + "'");
-  const bool cpu_device = base_dev.is_null() || base_dev.value("type", std::string()) == "cpu";
+  const bool cpu_device = is_cpu_device(base_dev);
   const auto all_have_cpu = [](const json& doc) {
     const json& pts = doc["points"];
     return std::all_of(pts.begin(), pts.end(), [](const json& p) { return p.contains("samples_cpu_ms"); });

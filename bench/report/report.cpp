@@ -158,6 +158,10 @@ nlohmann::json build_json() {
 
 }  // namespace
 
+bool is_cpu_device(const nlohmann::json& device) {
+  return device.is_null() || device.value("type", std::string()) == "cpu";
+}
+
 nlohmann::json device_json(const vk::DeviceInfo& d) {
   return {{"index", d.index},
           {"name", d.name},

@@ -29,6 +29,10 @@ nlohmann::json run_context(const vk::DeviceInfo* device);
 // throttle reasons); other GPUs: recorded as unknown, with why.
 nlohmann::json power_state(const vk::DeviceInfo* device);
 nlohmann::json device_json(const vk::DeviceInfo& device);
+// Whether a results context's device (context.device, as device_json writes it; null when the run
+// used no Vulkan device) is the CPU, as lavapipe is: there the process's CPU time is the work done,
+// and the commands that choose a clock (compare, ab, figure9) take it instead of wall-clock time.
+bool is_cpu_device(const nlohmann::json& device);
 
 // Wraps `body` as {"schema": name, "schema_version", "context", ...body} and writes it atomically.
 void write_results(const std::string& path, const std::string& schema_name, const nlohmann::json& context,

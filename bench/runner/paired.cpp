@@ -380,7 +380,7 @@ compare::Report describe_builds(const json hello[2], const Workers& workers, con
   if (hello[0]["context"]["device"] != device)
     report.notes.push_back(fmt::format("the builds chose different devices: {} and {}",
                                        device_name(hello[0]["context"]["device"]), device_name(device)));
-  const bool software = device.is_null() || device.value("type", std::string()) == "cpu";
+  const bool software = is_cpu_device(device);
   report.clock = o.times == "auto" ? (software ? "cpu" : "wall") : o.times;
   report.notes.push_back(fmt::format("one machine, one run: {} ({} cores), device {}, LP_NUM_THREADS={}",
                                      context.value("cpu_model", std::string("?")), context.value("cpu_cores", 0),
@@ -397,7 +397,7 @@ compare::Report describe_builds(const json hello[2], const Workers& workers, con
 // The points both builds can measure, in the baseline's order; the rest are named in notes.
 std::vector<Pairing> pair_points(const json hello[2], const Workers& workers, const Options& o, compare::Report& report) {
   const json& device = hello[1]["context"]["device"];
-  const bool software = device.is_null() || device.value("type", std::string()) == "cpu";
+  const bool software = is_cpu_device(device);
   std::map<std::string, std::size_t> candidate_index;
   for (std::size_t i = 0; i < hello[1]["points"].size(); ++i) candidate_index[hello[1]["points"][i]["id"]] = i;
   std::vector<Pairing> pairings;
