@@ -21,6 +21,7 @@
 #include "report.hpp"
 #include "scene.hpp"
 #include "stats.hpp"
+#include "store.hpp"
 #include "sweep.hpp"
 
 namespace bokeh {
@@ -279,7 +280,11 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
                    "the same round, exponents the median over rounds of each round's own fit"},
       {"repeat_interval", "repeat_low/repeat_high: where a repeat run on this machine would put its estimate, at 95% "
                           "(the interval widened by sqrt(2)); a repeat run's estimate falls in the plain 95% interval "
-                          "only about 83% of the time"},
+                          "only about 83% of the time. From measurement.run_to_run.min_earlier_runs earlier runs of "
+                          "the same commit and points on this machine (the results store) on, where their estimates "
+                          "spread wider than this run's interval, each side is sqrt(2) * 1.96 * run_to_run_sd "
+                          "instead (history::widen_repeat_intervals): a run's own rounds cannot show the offset "
+                          "between runs"},
       {"targets", {{"ratio_relative_half_width", target_ratio}, {"exponent_half_width", target_exponent}}},
       {"settled", lead.unsettled.empty()},
       {"unsettled", lead.unsettled},
@@ -287,11 +292,34 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
       {"probe_drift", probe_drift(doc["measurement"])},
       {"wall_time", {{"series", wall.series}, {"naive_over_flag", wall.naive_over_flag}, {"unsettled", wall.unsettled}}}};
   add_unclipped_fits(doc);
+  history::widen_repeat_intervals(doc);
 }
 
 // "1.23 [1.20, 1.26]": an exponent with the 95% interval in `i` (its low and high).
 std::string fit_text(double estimate, const nlohmann::json& i) {
   return fmt::format("{:.2f} [{:.2f}, {:.2f}]", estimate, i["low"].get<double>(), i["high"].get<double>());
+}
+
+// What the repeat-run intervals above rest on: this run's rounds alone, or also the spread of the
+// machine's earlier runs of this code and configuration.
+void print_repeat_basis(const nlohmann::json& measurement) {
+  if (!measurement.contains("run_to_run")) {
+    fmt::print("a repeat run: from this run's rounds alone (no results store to measure how far runs differ)\n");
+    return;
+  }
+  const nlohmann::json& spread = measurement["run_to_run"];
+  const int earlier = spread.value("earlier_runs", 0), needed = spread.value("min_earlier_runs", history::kRunToRunMinRuns);
+  if (earlier >= needed) {
+    fmt::print("a repeat run: where this machine's {} earlier runs of this commit and configuration (the results store) "
+               "spread their estimates wider than this run's interval, the repeat-run interval is sqrt(2) * 1.96 of "
+               "their standard deviation\n",
+               earlier);
+    return;
+  }
+  fmt::print("a repeat run: from this run's rounds alone ({} earlier runs of this commit and configuration in the results "
+             "store; {} needed to measure how far runs differ). Runs on a shared machine can differ by more than their "
+             "rounds show: expect some repeat-run estimates outside these intervals\n",
+             earlier, needed);
 }
 
 void print_summary(const nlohmann::json& doc) {
@@ -336,6 +364,7 @@ void print_summary(const nlohmann::json& doc) {
                  w["high"].get<double>());
     fmt::print("\n");
   }
+  print_repeat_basis(doc["measurement"]);
   // The ratios move with the machine's memory speed (README, "Do two runs agree?"): say what it was.
   if (const auto& limits = doc["measurement"].value("limits", nlohmann::json::object());
       limits.contains("gpu_copy_gb_per_s") || limits.contains("cpu_copy_gb_per_s")) {

@@ -101,11 +101,13 @@ def figure9(d):
     """Each backend's figures are in the time the CPU's share of the work calls for (process CPU time for the CPU
     references and on a CPU device such as lavapipe, else wall-clock; headlines.wall_time always wall-clock), and
     each naive/FLAG ratio and curve median is recomputed here from the points' samples in that time: the median of
-    the ratios within each round with its order-statistic interval, and the repeat-run interval sqrt(2) wider."""
+    the ratios within each round with its order-statistic interval, and the repeat-run interval sqrt(2) wider (or
+    by the spread of the machine's earlier runs, measurement.run_to_run, where that is wider)."""
     software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
     field = {"process CPU time": "samples_cpu_ms", "wall-clock time": "samples_ms"}
     points = {(p["method"], p["backend"], p["N"]): p for p in d["points"] if not p.get("variant")}
-    checked = 0
+    spread = d["measurement"].get("run_to_run", {})
+    checked = widened = 0
     for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
         for r in figures["naive_over_flag"]:
             want_time = "process CPU time" if lead and (r["backend"] == "cpu" or software) else "wall-clock time"
@@ -115,8 +117,17 @@ def figure9(d):
             paired = [ms / b_ms[k] for k, ms in zip(a["sample_rounds"], a[field[r["time"]]]) if k in b_ms]
             est, low, high = median_interval(paired)
             assert all(close(g, w) for g, w in zip((r["naive_over_flag"], r["low"], r["high"]), (est, low, high))), (r, est)
-            assert close(r["repeat_low"], est - math.sqrt(2) * (est - low)), r
-            assert close(r["repeat_high"], est + math.sqrt(2) * (high - est)), r
+            # The repeat-run interval: sqrt(2) wider, or sqrt(2) * 1.96 * the spread of this machine's earlier runs
+            # of the same code where that is wider (measurement.run_to_run; ratios' spread is of their logs).
+            sd = 0
+            if lead and spread.get("earlier_runs", 0) >= spread.get("min_earlier_runs", 3):
+                name = f"naive_over_flag/{r['backend']}/N:{r['N']}" + ("/cpu_time" if r["time"] == "process CPU time" else "")
+                if name in spread["figures"]:
+                    sd = spread["figures"][name]["sd"] * est
+                    widened += 1
+            assert close(r.get("run_to_run_sd", 0), sd), (r, sd)
+            assert close(r["repeat_low"], est - math.sqrt(2) * max(est - low, 1.96 * sd)), r
+            assert close(r["repeat_high"], est + math.sqrt(2) * max(high - est, 1.96 * sd)), r
             checked += 1
         for s in figures["series"]:
             if s.get("variant"):
@@ -125,7 +136,8 @@ def figure9(d):
                 p = points[(s["method"], s["backend"], int(n))]
                 assert close(median, median_interval(p[field[s["time"]]])[0]), (s["method"], s["backend"], n)
     assert checked, "no naive/FLAG ratio to check"
-    print(checked, "naive/FLAG ratios and the curves' medians check against the samples, in",
+    print(checked, "naive/FLAG ratios (", widened, "repeat-run intervals by the spread of earlier runs ) and the curves' "
+          "medians check against the samples, in",
           sorted({s["time"] + " (" + s["backend"] + ")" for s in d["series"]}))
 
 

@@ -23,10 +23,10 @@ std::string interval_text(const nlohmann::json& interval, int decimals) {
                      interval["low"].get<double>(), decimals, interval["high"].get<double>(), decimals);
 }
 
-Interval repeat_run(const Interval& confidence) {
-  const double widen = std::sqrt(2.0);
-  return {confidence.estimate, confidence.estimate - widen * (confidence.estimate - confidence.low),
-          confidence.estimate + widen * (confidence.high - confidence.estimate)};
+Interval repeat_run(const Interval& confidence, double run_to_run_sd) {
+  const double widen = std::sqrt(2.0), spread = 1.96 * run_to_run_sd;
+  return {confidence.estimate, confidence.estimate - widen * std::max(confidence.estimate - confidence.low, spread),
+          confidence.estimate + widen * std::max(confidence.high - confidence.estimate, spread)};
 }
 
 RoundValues round_values(const nlohmann::json& point, const char* field) {

@@ -1,9 +1,13 @@
 #include "store.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <numeric>
+#include <set>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -13,6 +17,7 @@
 #include <pqxx/pqxx>
 #endif
 
+#include "intervals.hpp"
 #include "report.hpp"
 #include "runner.hpp"
 
@@ -535,17 +540,21 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc) {
   auto in_time = [](const nlohmann::json& figure) {
     return figure.value("time", std::string()) == kProcessCpuTime ? std::string("/cpu_time") : std::string();
   };
-  for (const auto& r : array("naive_over_flag"))
-    if (is_number(r, "naive_over_flag"))
+  for (std::size_t i = 0; i < array("naive_over_flag").size(); ++i)
+    if (const auto& r = array("naive_over_flag")[i]; is_number(r, "naive_over_flag")) {
       out.push_back(figure(fmt::format("naive_over_flag/{}/N:{}{}", r.value("backend", "?"), r.value("N", 0), in_time(r)),
                            "ratio", r["naive_over_flag"].get<double>(), r));
-  for (const auto& c : array("series"))
-    if (c.is_object() && c.contains("fits") && c["fits"].is_object())
+      out.back().at = fmt::format("/naive_over_flag/{}", i);
+    }
+  for (std::size_t i = 0; i < array("series").size(); ++i)
+    if (const auto& c = array("series")[i]; c.is_object() && c.contains("fits") && c["fits"].is_object())
       for (const auto& [fit, f] : c["fits"].items())
-        if (is_number(f, "exponent"))
+        if (is_number(f, "exponent")) {
           out.push_back(figure(fmt::format("exponent/{}{}/{}/{}{}", c.value("method", "?"), c.value("variant", ""),
                                            c.value("backend", "?"), fit, in_time(c)),
                                "exponent", f["exponent"].get<double>(), f));
+          out.back().at = fmt::format("/series/{}/fits/{}", i, fit);
+        }
   // adaptive: off / on per configuration, paired within rounds when the run has it.
   for (const auto& c : array("comparisons")) {
     if (!c.is_object() || !c.contains("off_id")) continue;
@@ -589,6 +598,61 @@ nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent
   }
   return {{"earlier_runs", earlier_runs}, {"recent_runs_compared", recent_runs}, {"unusual_ratio", unusual_ratio},
           {"min_earlier_runs", kMachineStateMinRuns}, {"probes", probes}, {"unusual", unusual}};
+}
+
+nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const std::string& sweep, int recent_runs) {
+  const nlohmann::json& context = doc.at("context");
+  const std::string machine = machine_key(context), commit = context.value("git_commit", "unknown");
+  std::set<std::string> point_ids;
+  for (const auto& p : doc.at("points")) point_ids.insert(p.at("id").get<std::string>());
+  std::vector<std::int64_t> earlier;  // oldest first
+  for (const RunRow& run : store.runs()) {
+    if (run.machine != machine || run.commit != commit || run.sweep != sweep || run.status != "complete") continue;
+    std::set<std::string> theirs;
+    for (const PointRow& p : store.points(run.id)) theirs.insert(p.point_id);
+    if (theirs == point_ids) earlier.push_back(run.id);
+  }
+  if (earlier.size() > static_cast<std::size_t>(recent_runs))
+    earlier.erase(earlier.begin(), earlier.end() - recent_runs);  // keep the latest
+  std::map<std::string, std::vector<double>> values;
+  std::map<std::string, bool> relative;
+  for (std::int64_t id : earlier)
+    for (const HeadlineRow& h : store.headlines(id))
+      if (h.low && (h.unit == "exponent" || (h.unit == "ratio" && h.value > 0))) {
+        relative[h.name] = h.unit == "ratio";
+        values[h.name].push_back(relative[h.name] ? std::log(h.value) : h.value);
+      }
+  nlohmann::json figures = nlohmann::json::object();
+  for (const auto& [name, v] : values) {
+    if (v.size() < 2) continue;
+    const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+    double squares = 0;
+    for (double x : v) squares += (x - mean) * (x - mean);
+    const double sd = std::sqrt(squares / static_cast<double>(v.size() - 1));  // the sample's (n - 1)
+    figures[name] = {{"sd", sd}, {"relative", relative[name]}, {"runs", v.size()}};
+  }
+  return {{"earlier_runs", earlier.size()},
+          {"min_earlier_runs", kRunToRunMinRuns},
+          {"recent_runs_compared", recent_runs},
+          {"same", "machine, commit, sweep and point ids"},
+          {"figures", figures}};
+}
+
+void widen_repeat_intervals(nlohmann::json& doc) {
+  if (!doc.contains("measurement") || !doc["measurement"].contains("run_to_run")) return;
+  const nlohmann::json& spread = doc["measurement"]["run_to_run"];
+  if (spread.value("earlier_runs", 0) < kRunToRunMinRuns) return;
+  for (const HeadlineRow& h : headlines_of(doc)) {
+    if (h.at.empty() || !h.low || !spread["figures"].contains(h.name)) continue;
+    nlohmann::json& f = doc[nlohmann::json::json_pointer(h.at)];
+    if (!f.contains("repeat_low")) continue;
+    const auto& s = spread["figures"][h.name];
+    const double sd = s["sd"].get<double>() * (s["relative"].get<bool>() ? h.value : 1);
+    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd);
+    f["repeat_low"] = repeat.low;
+    f["repeat_high"] = repeat.high;
+    f["run_to_run_sd"] = sd;
+  }
 }
 
 std::int64_t append_run(const std::string& url, const nlohmann::json& doc, const std::string& command) {

@@ -51,6 +51,7 @@ struct HeadlineRow {
   std::string unit;  // "ratio", "exponent", "cases"
   double value = 0;
   std::optional<double> low, high;  // the run's interval (95%), when it gave one
+  std::string at;                    // headlines_of: the figure's JSON pointer in its document (figure9's)
 };
 
 // One value of a series: a run's figure for one point (or one headline figure: median_ms is its value,
@@ -133,6 +134,20 @@ std::vector<HeadlineRow> headlines_of(const nlohmann::json& doc);
 // apart, naive/FLAG ratios up to 12%), which no interval drawn from one run's rounds can cover.
 constexpr int kMachineStateMinRuns = 3;
 nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent_runs = 10, double unusual_ratio = 1.3);
+
+// How far this machine's repeat runs put each headline figure: over the same machine's (machine_key)
+// latest `recent_runs` complete runs of sweep `sweep` at the same commit with the same point ids as
+// `doc` (context and points; not yet appended), the standard deviation of each figure that had an
+// interval (ratios: of their logs, a relative spread). {"earlier_runs", "min_earlier_runs",
+// "figures": {name: {"sd", "relative", "runs"}}}. A run's own rounds cannot show this spread (see
+// repeat_run); from kRunToRunMinRuns earlier runs on, widen_repeat_intervals uses it.
+constexpr int kRunToRunMinRuns = 3;
+nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const std::string& sweep, int recent_runs = 10);
+
+// Every headline figure of `doc` with a repeat-run interval (figure9's repeat_low/repeat_high) gets
+// it from repeat_run(its interval, the spread of measurement.run_to_run) and the spread it used
+// (run_to_run_sd, in its units), when the run had kRunToRunMinRuns earlier runs to take it from.
+void widen_repeat_intervals(nlohmann::json& doc);
 
 // A command's run appended to the store at `url` once its results file is written (the file is the
 // run's output; the store its history), as `doc` (with its schema and context) by Store::append_document;

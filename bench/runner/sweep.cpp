@@ -529,15 +529,18 @@ void append_to_store(const SweepSettings& s, const nlohmann::json& context, cons
 }
 
 // The machine's state during the run against its earlier runs in the store (history::machine_state),
-// before this run is appended; with no store, or none yet, there is nothing to compare with.
+// and how far its repeat runs of this code and configuration put each headline figure
+// (history::run_to_run_spread, which derive reads), before this run is appended; with no store, or
+// none yet, there is nothing to compare with.
 void add_machine_state(const SweepSettings& s, const nlohmann::json& context, nlohmann::json& doc) {
   if (s.store_url.empty() || !doc.contains("measurement")) return;
   nlohmann::json& measurement = doc["measurement"];
   try {
     auto store = history::Store::open(s.store_url, false);
     measurement["machine_state"] = history::machine_state(*store, {{"context", context}, {"measurement", measurement}});
+    measurement["run_to_run"] = history::run_to_run_spread(*store, {{"context", context}, {"points", doc["points"]}}, s.name);
   } catch (const std::exception& e) {
-    measurement["machine_state"] = {{"earlier_runs", 0}, {"note", e.what()}};
+    measurement["machine_state"] = measurement["run_to_run"] = {{"earlier_runs", 0}, {"note", e.what()}};
   }
 }
 
@@ -722,8 +725,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const bool complete = record.status == "complete";
   add_median_intervals(doc);
   add_noise(doc);
-  if (s.derive) s.derive(doc);
   add_machine_state(s, context, doc);
+  if (s.derive) s.derive(doc);
   // gbench's own statistics and names, for compare.py.
   // Nothing measured yet (interrupted during the first visit, or every point skipped): gbench would
   // write only "Failed to match any benchmarks", so write an empty but valid document instead.

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
@@ -123,6 +124,71 @@ TEST_P(StoreTest, MachineStateComparesTheProbesWithThisMachinesEarlierRuns) {
   EXPECT_TRUE(machine_state(*store, sweep_doc("EPYC", "2026-01-10T00:00:00Z", 16.8, 40), 3)["unusual"].empty());
   EXPECT_EQ(machine_state(*store, sweep_doc("EPYC", "2026-01-10T00:00:00Z", 10, 40), 3)["unusual"],
             nlohmann::json::array({"gpu_copy"})) << "faster counts too";
+}
+
+// run_to_run_spread takes each headline figure's spread over the same machine's earlier complete runs
+// of the same commit and point ids (ratios in logs), and widen_repeat_intervals holds a figure9 ratio
+// and exponent to it once there are kRunToRunMinRuns such runs: the sample standard deviations of
+// known values, and repeat_run's closed form.
+TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheSameCode) {
+  auto run_doc = [](const std::string& cpu, const std::string& commit, const std::string& point, int day, double ratio,
+                    double exponent, const std::string& status = "complete") {
+    return nlohmann::json{
+        {"schema", "bokehbench.figure9"},
+        {"status", status},
+        {"context", {{"cpu_model", cpu}, {"cpu_cores", 2}, {"date_utc", fmt::format("2026-01-{:02}T00:00:00Z", day)},
+                     {"git_commit", commit}}},
+        {"points", {{{"id", point}, {"method", "naive"}, {"backend", "gpu"}, {"samples_ms", {1.0, 2.0}}}}},
+        {"naive_over_flag", {{{"N", 9}, {"backend", "gpu"}, {"naive_over_flag", ratio}, {"low", ratio * 0.99},
+                              {"high", ratio * 1.01}, {"repeat_low", 0}, {"repeat_high", 0}}}},
+        {"series", {{{"method", "naive"}, {"variant", ""}, {"backend", "gpu"},
+                     {"fits", {{"larger_half", {{"exponent", exponent}, {"low", exponent - 0.01}, {"high", exponent + 0.01},
+                                                {"repeat_low", 0}, {"repeat_high", 0}}}}}}}}};
+  };
+  auto store = Store::open(url_, true);
+  const nlohmann::json now = run_doc("EPYC", "c", "p", 20, 2.0, 1.5);
+  for (int i = 0; i < 2; ++i) store->append_document(run_doc("EPYC", "c", "p", i + 1, 2.0 + 0.2 * i, 1.0 + 0.1 * i), "x", "run");
+  // None of these is a repeat run of `now`: other code, another machine, other points, not complete.
+  store->append_document(run_doc("EPYC", "other", "p", 5, 50, 5), "x", "run");
+  store->append_document(run_doc("Xeon", "c", "p", 6, 50, 5), "x", "run");
+  store->append_document(run_doc("EPYC", "c", "q", 7, 50, 5), "x", "run");
+  store->append_document(run_doc("EPYC", "c", "p", 8, 50, 5, "interrupted"), "x", "run");
+
+  nlohmann::json two = now;
+  two["measurement"]["run_to_run"] = run_to_run_spread(*store, now, "figure9");
+  EXPECT_EQ(two["measurement"]["run_to_run"]["earlier_runs"], 2);
+  widen_repeat_intervals(two);
+  EXPECT_FALSE(two["naive_over_flag"][0].contains("run_to_run_sd")) << "two earlier runs are too few";
+  EXPECT_EQ(two["naive_over_flag"][0]["repeat_low"], 0) << "left as derive wrote it";
+
+  store->append_document(run_doc("EPYC", "c", "p", 3, 2.4, 1.2), "x", "run");
+  nlohmann::json doc = now;
+  doc["measurement"]["run_to_run"] = run_to_run_spread(*store, now, "figure9");
+  const auto& figures = doc["measurement"]["run_to_run"]["figures"];
+  EXPECT_EQ(doc["measurement"]["run_to_run"]["earlier_runs"], 3);
+  const double mean_log = (std::log(2.0) + std::log(2.2) + std::log(2.4)) / 3;
+  const double sd_log = std::sqrt((std::pow(std::log(2.0) - mean_log, 2) + std::pow(std::log(2.2) - mean_log, 2) +
+                                   std::pow(std::log(2.4) - mean_log, 2)) / 2);
+  EXPECT_NEAR(figures["naive_over_flag/gpu/N:9"]["sd"].get<double>(), sd_log, 1e-12);
+  EXPECT_TRUE(figures["naive_over_flag/gpu/N:9"]["relative"].get<bool>());
+  EXPECT_NEAR(figures["exponent/naive/gpu/larger_half"]["sd"].get<double>(), 0.1, 1e-12);  // of 1.0, 1.1, 1.2
+
+  widen_repeat_intervals(doc);
+  const auto& r = doc["naive_over_flag"][0];
+  EXPECT_NEAR(r["run_to_run_sd"].get<double>(), 2.0 * sd_log, 1e-12);  // relative, at this run's 2.0
+  EXPECT_NEAR(r["repeat_low"].get<double>(), 2.0 - std::sqrt(2.0) * 1.96 * 2.0 * sd_log, 1e-12);
+  EXPECT_NEAR(r["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * 1.96 * 2.0 * sd_log, 1e-12);
+  const auto& f = doc["series"][0]["fits"]["larger_half"];
+  EXPECT_NEAR(f["repeat_low"].get<double>(), 1.5 - std::sqrt(2.0) * 1.96 * 0.1, 1e-12);
+  EXPECT_NEAR(f["repeat_high"].get<double>(), 1.5 + std::sqrt(2.0) * 1.96 * 0.1, 1e-12);
+
+  // A run whose own interval is wider than the spread keeps its own side, sqrt(2) wider.
+  nlohmann::json wide = now;
+  wide["naive_over_flag"][0]["low"] = 1.0;
+  wide["measurement"]["run_to_run"] = doc["measurement"]["run_to_run"];
+  widen_repeat_intervals(wide);
+  EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_low"].get<double>(), 2.0 - std::sqrt(2.0) * 1.0, 1e-12);
+  EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * 1.96 * 2.0 * sd_log, 1e-12);
 }
 
 TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
