@@ -282,9 +282,9 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
                           "(the interval widened by sqrt(2)); a repeat run's estimate falls in the plain 95% interval "
                           "only about 83% of the time. From measurement.run_to_run.min_earlier_runs earlier runs of "
                           "the same commit and points on this machine (the results store) on, where their estimates "
-                          "spread wider than this run's interval, each side is sqrt(2) * 1.96 * run_to_run_sd "
-                          "instead (history::widen_repeat_intervals): a run's own rounds cannot show the offset "
-                          "between runs"},
+                          "spread wider than this run's interval, each side is sqrt(2) * run_to_run_t * "
+                          "run_to_run_sd instead (t: Student's 97.5% quantile for that many runs less one; "
+                          "history::widen_repeat_intervals): a run's own rounds cannot show the offset between runs"},
       {"targets", {{"ratio_relative_half_width", target_ratio}, {"exponent_half_width", target_exponent}}},
       {"settled", lead.unsettled.empty()},
       {"unsettled", lead.unsettled},
@@ -311,9 +311,9 @@ void print_repeat_basis(const nlohmann::json& measurement) {
   const int earlier = spread.value("earlier_runs", 0), needed = spread.value("min_earlier_runs", history::kRunToRunMinRuns);
   if (earlier >= needed) {
     fmt::print("a repeat run: where this machine's {} earlier runs of this commit and configuration (the results store) "
-               "spread their estimates wider than this run's interval, the repeat-run interval is sqrt(2) * 1.96 of "
-               "their standard deviation\n",
-               earlier);
+               "spread their estimates wider than this run's interval, the repeat-run interval is sqrt(2) * t of their "
+               "standard deviation (t = {:.2f}, Student's 97.5% for {} runs: fewer runs, wider)\n",
+               earlier, student_t_975(earlier - 1), earlier);
     return;
   }
   fmt::print("a repeat run: from this run's rounds alone ({} earlier runs of this commit and configuration in the results "

@@ -97,6 +97,11 @@ def intervals(d):
           f"(+-{100 * median:.1f}%, {'noisy' if noise['noisy'] else 'not noisy'}) check")
 
 
+# Student's t distribution, 97.5% quantile by degrees of freedom (published tables).
+STUDENT_T_975 = {1: 12.706205, 2: 4.302653, 3: 3.182446, 4: 2.776445, 5: 2.570582, 6: 2.446912, 7: 2.364624,
+                 8: 2.306004, 9: 2.262157}
+
+
 def figure9(d):
     """Each backend's figures are in the time the CPU's share of the work calls for (process CPU time for the CPU
     references and on a CPU device such as lavapipe, else wall-clock; headlines.wall_time always wall-clock), and
@@ -117,17 +122,20 @@ def figure9(d):
             paired = [ms / b_ms[k] for k, ms in zip(a["sample_rounds"], a[field[r["time"]]]) if k in b_ms]
             est, low, high = median_interval(paired)
             assert all(close(g, w) for g, w in zip((r["naive_over_flag"], r["low"], r["high"]), (est, low, high))), (r, est)
-            # The repeat-run interval: sqrt(2) wider, or sqrt(2) * 1.96 * the spread of this machine's earlier runs
-            # of the same code where that is wider (measurement.run_to_run; ratios' spread is of their logs).
-            sd = 0
+            # The repeat-run interval: sqrt(2) wider, or sqrt(2) * t * the spread of this machine's earlier runs
+            # of the same code where that is wider (measurement.run_to_run; ratios' spread is of their logs; t:
+            # Student's 97.5% quantile for their number less one, from the published table).
+            sd = t = 0
             if lead and spread.get("earlier_runs", 0) >= spread.get("min_earlier_runs", 3):
                 name = f"naive_over_flag/{r['backend']}/N:{r['N']}" + ("/cpu_time" if r["time"] == "process CPU time" else "")
                 if name in spread["figures"]:
                     sd = spread["figures"][name]["sd"] * est
+                    t = r["run_to_run_t"]
+                    assert abs(t - STUDENT_T_975[spread["figures"][name]["runs"] - 1]) < 1e-5, r
                     widened += 1
             assert close(r.get("run_to_run_sd", 0), sd), (r, sd)
-            assert close(r["repeat_low"], est - math.sqrt(2) * max(est - low, 1.96 * sd)), r
-            assert close(r["repeat_high"], est + math.sqrt(2) * max(high - est, 1.96 * sd)), r
+            assert close(r["repeat_low"], est - math.sqrt(2) * max(est - low, t * sd)), r
+            assert close(r["repeat_high"], est + math.sqrt(2) * max(high - est, t * sd)), r
             checked += 1
         for s in figures["series"]:
             if s.get("variant"):

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -23,10 +24,31 @@ std::string interval_text(const nlohmann::json& interval, int decimals) {
                      interval["low"].get<double>(), decimals, interval["high"].get<double>(), decimals);
 }
 
-Interval repeat_run(const Interval& confidence, double run_to_run_sd) {
-  const double widen = std::sqrt(2.0), spread = 1.96 * run_to_run_sd;
+Interval repeat_run(const Interval& confidence, double run_to_run_sd, int earlier_runs) {
+  const double widen = std::sqrt(2.0);
+  const double spread = earlier_runs >= 2 ? student_t_975(earlier_runs - 1) * run_to_run_sd : 0;
   return {confidence.estimate, confidence.estimate - widen * std::max(confidence.estimate - confidence.low, spread),
           confidence.estimate + widen * std::max(confidence.high - confidence.estimate, spread)};
+}
+
+double student_t_975(int degrees_of_freedom) {
+  if (degrees_of_freedom < 1) throw std::invalid_argument("student_t_975: degrees of freedom must be >= 1");
+  const double nu = degrees_of_freedom;
+  const double log_norm = std::lgamma((nu + 1) / 2) - std::lgamma(nu / 2) - 0.5 * std::log(nu * std::acos(-1.0));
+  auto density = [&](double t) { return std::exp(log_norm - (nu + 1) / 2 * std::log1p(t * t / nu)); };
+  auto mass_from_zero = [&](double x) {  // P(0 < T < x), Simpson's rule
+    const int steps = 4000;
+    const double h = x / steps;
+    double sum = density(0) + density(x);
+    for (int i = 1; i < steps; ++i) sum += (i % 2 ? 4 : 2) * density(i * h);
+    return sum * h / 3;
+  };
+  double low = 0, high = 20;  // t(1) = 12.71
+  while (high - low > 1e-7) {
+    const double mid = (low + high) / 2;
+    (mass_from_zero(mid) < 0.475 ? low : high) = mid;
+  }
+  return (low + high) / 2;
 }
 
 RoundValues round_values(const nlohmann::json& point, const char* field) {

@@ -648,10 +648,11 @@ void widen_repeat_intervals(nlohmann::json& doc) {
     if (!f.contains("repeat_low")) continue;
     const auto& s = spread["figures"][h.name];
     const double sd = s["sd"].get<double>() * (s["relative"].get<bool>() ? h.value : 1);
-    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd);
+    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd, s["runs"].get<int>());
     f["repeat_low"] = repeat.low;
     f["repeat_high"] = repeat.high;
     f["run_to_run_sd"] = sd;
+    f["run_to_run_t"] = student_t_975(s["runs"].get<int>() - 1);
   }
 }
 

@@ -145,8 +145,8 @@ constexpr int kRunToRunMinRuns = 3;
 nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const std::string& sweep, int recent_runs = 10);
 
 // Every headline figure of `doc` with a repeat-run interval (figure9's repeat_low/repeat_high) gets
-// it from repeat_run(its interval, the spread of measurement.run_to_run) and the spread it used
-// (run_to_run_sd, in its units), when the run had kRunToRunMinRuns earlier runs to take it from.
+// it from repeat_run(its interval, the spread of measurement.run_to_run over its runs) and what it
+// used (run_to_run_sd, in its units; run_to_run_t), when the run had kRunToRunMinRuns earlier runs.
 void widen_repeat_intervals(nlohmann::json& doc);
 
 // A command's run appended to the store at `url` once its results file is written (the file is the

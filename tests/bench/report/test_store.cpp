@@ -18,6 +18,7 @@
 
 #include "history.hpp"
 #include "html_report.hpp"
+#include "intervals.hpp"
 #include "merge.hpp"
 #include "store.hpp"
 
@@ -129,7 +130,7 @@ TEST_P(StoreTest, MachineStateComparesTheProbesWithThisMachinesEarlierRuns) {
 // run_to_run_spread takes each headline figure's spread over the same machine's earlier complete runs
 // of the same commit and point ids (ratios in logs), and widen_repeat_intervals holds a figure9 ratio
 // and exponent to it once there are kRunToRunMinRuns such runs: the sample standard deviations of
-// known values, and repeat_run's closed form.
+// known values, and repeat_run's closed form (Student's t with 2 degrees of freedom for 3 runs).
 TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheSameCode) {
   auto run_doc = [](const std::string& cpu, const std::string& commit, const std::string& point, int day, double ratio,
                     double exponent, const std::string& status = "complete") {
@@ -176,11 +177,13 @@ TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheS
   widen_repeat_intervals(doc);
   const auto& r = doc["naive_over_flag"][0];
   EXPECT_NEAR(r["run_to_run_sd"].get<double>(), 2.0 * sd_log, 1e-12);  // relative, at this run's 2.0
-  EXPECT_NEAR(r["repeat_low"].get<double>(), 2.0 - std::sqrt(2.0) * 1.96 * 2.0 * sd_log, 1e-12);
-  EXPECT_NEAR(r["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * 1.96 * 2.0 * sd_log, 1e-12);
+  const double t = student_t_975(2);  // 3 earlier runs
+  EXPECT_NEAR(r["run_to_run_t"].get<double>(), t, 1e-12);
+  EXPECT_NEAR(r["repeat_low"].get<double>(), 2.0 - std::sqrt(2.0) * t * 2.0 * sd_log, 1e-12);
+  EXPECT_NEAR(r["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * t * 2.0 * sd_log, 1e-12);
   const auto& f = doc["series"][0]["fits"]["larger_half"];
-  EXPECT_NEAR(f["repeat_low"].get<double>(), 1.5 - std::sqrt(2.0) * 1.96 * 0.1, 1e-12);
-  EXPECT_NEAR(f["repeat_high"].get<double>(), 1.5 + std::sqrt(2.0) * 1.96 * 0.1, 1e-12);
+  EXPECT_NEAR(f["repeat_low"].get<double>(), 1.5 - std::sqrt(2.0) * t * 0.1, 1e-12);
+  EXPECT_NEAR(f["repeat_high"].get<double>(), 1.5 + std::sqrt(2.0) * t * 0.1, 1e-12);
 
   // A run whose own interval is wider than the spread keeps its own side, sqrt(2) wider.
   nlohmann::json wide = now;
@@ -188,7 +191,7 @@ TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheS
   wide["measurement"]["run_to_run"] = doc["measurement"]["run_to_run"];
   widen_repeat_intervals(wide);
   EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_low"].get<double>(), 2.0 - std::sqrt(2.0) * 1.0, 1e-12);
-  EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * 1.96 * 2.0 * sd_log, 1e-12);
+  EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * t * 2.0 * sd_log, 1e-12);
 }
 
 TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
