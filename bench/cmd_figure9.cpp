@@ -280,10 +280,10 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
                    "the same round, exponents the median over rounds of each round's own fit"},
       {"repeat_interval", "repeat_low/repeat_high: where a repeat run on this machine would put its estimate, at 95% "
                           "(the interval widened by sqrt(2)); a repeat run's estimate falls in the plain 95% interval "
-                          "only about 83% of the time. From measurement.run_to_run.min_earlier_runs earlier runs of "
-                          "the same commit and points on this machine (the results store) on, where their estimates "
-                          "spread wider than this run's interval, each side is sqrt(2) * run_to_run_t * "
-                          "run_to_run_sd instead (t: Student's 97.5% quantile for that many runs less one; "
+                          "only about 83% of the time. Where this machine's earlier runs of the same points (the "
+                          "results store; measurement.run_to_run: the spread about each commit's mean, pooled, from "
+                          "min_degrees_of_freedom on) spread wider than this run's interval, each side is sqrt(2) * "
+                          "run_to_run_t * run_to_run_sd instead (t: Student's 97.5% quantile for its degrees of freedom; "
                           "history::widen_repeat_intervals): a run's own rounds cannot show the offset between runs"},
       {"targets", {{"ratio_relative_half_width", target_ratio}, {"exponent_half_width", target_exponent}}},
       {"settled", lead.unsettled.empty()},
@@ -308,18 +308,25 @@ void print_repeat_basis(const nlohmann::json& measurement) {
     return;
   }
   const nlohmann::json& spread = measurement["run_to_run"];
-  const int earlier = spread.value("earlier_runs", 0), needed = spread.value("min_earlier_runs", history::kRunToRunMinRuns);
-  if (earlier >= needed) {
-    fmt::print("a repeat run: where this machine's {} earlier runs of this commit and configuration (the results store) "
-               "spread their estimates wider than this run's interval, the repeat-run interval is sqrt(2) * t of their "
-               "standard deviation (t = {:.2f}, Student's 97.5% for {} runs: fewer runs, wider)\n",
-               earlier, student_t_975(earlier - 1), earlier);
+  nlohmann::json most = {{"degrees_of_freedom", 0}};  // the figures share their runs; the best-measured one
+  for (const auto& figure : spread.value("figures", nlohmann::json::object()))
+    if (figure["degrees_of_freedom"] > most["degrees_of_freedom"]) most = figure;
+  const int degrees_of_freedom = most["degrees_of_freedom"];
+  const int needed = spread.value("min_degrees_of_freedom", history::kRunToRunMinDegreesOfFreedom);
+  if (degrees_of_freedom >= needed) {
+    fmt::print("a repeat run: where this machine's earlier runs of this configuration ({} runs of {} commit{} in the "
+               "results store; degrees of freedom of their spread about each commit's mean: {}) spread their estimates wider than this "
+               "run's interval, the repeat-run interval is sqrt(2) * t of their standard deviation (t = {:.2f}, "
+               "Student's 97.5%: fewer runs, wider)\n",
+               most["runs"].get<int>(), most["commits"].get<int>(), most["commits"] == 1 ? "" : "s",
+               degrees_of_freedom, student_t_975(degrees_of_freedom));
     return;
   }
-  fmt::print("a repeat run: from this run's rounds alone ({} earlier runs of this commit and configuration in the results "
-             "store; {} needed to measure how far runs differ). Runs on a shared machine can differ by more than their "
-             "rounds show: expect some repeat-run estimates outside these intervals\n",
-             earlier, needed);
+  fmt::print("a repeat run: from this run's rounds alone (earlier runs of this configuration in the results store: {}; "
+             "degrees of freedom of their spread about each commit's mean: {} of the {} needed, as from 3 runs of one "
+             "commit or 2 each of two, to measure how far runs differ). Runs on a shared machine can differ by more "
+             "than their rounds show: expect some repeat-run estimates outside these intervals\n",
+             spread.value("earlier_runs", 0), degrees_of_freedom, needed);
 }
 
 void print_summary(const nlohmann::json& doc) {

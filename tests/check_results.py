@@ -123,16 +123,16 @@ def figure9(d):
             est, low, high = median_interval(paired)
             assert all(close(g, w) for g, w in zip((r["naive_over_flag"], r["low"], r["high"]), (est, low, high))), (r, est)
             # The repeat-run interval: sqrt(2) wider, or sqrt(2) * t * the spread of this machine's earlier runs
-            # of the same code where that is wider (measurement.run_to_run; ratios' spread is of their logs; t:
-            # Student's 97.5% quantile for their number less one, from the published table).
+            # of the same points where that is wider (measurement.run_to_run; ratios' spread is of their logs; t:
+            # Student's 97.5% quantile for its degrees of freedom, from the published table).
             sd = t = 0
-            if lead and spread.get("earlier_runs", 0) >= spread.get("min_earlier_runs", 3):
-                name = f"naive_over_flag/{r['backend']}/N:{r['N']}" + ("/cpu_time" if r["time"] == "process CPU time" else "")
-                if name in spread["figures"]:
-                    sd = spread["figures"][name]["sd"] * est
-                    t = r["run_to_run_t"]
-                    assert abs(t - STUDENT_T_975[spread["figures"][name]["runs"] - 1]) < 1e-5, r
-                    widened += 1
+            name = f"naive_over_flag/{r['backend']}/N:{r['N']}" + ("/cpu_time" if r["time"] == "process CPU time" else "")
+            spread_of = spread.get("figures", {}).get(name)
+            if lead and spread_of and spread_of["degrees_of_freedom"] >= spread["min_degrees_of_freedom"]:
+                sd = spread_of["sd"] * est
+                t = r["run_to_run_t"]
+                assert abs(t - STUDENT_T_975[spread_of["degrees_of_freedom"]]) < 1e-5, r
+                widened += 1
             assert close(r.get("run_to_run_sd", 0), sd), (r, sd)
             assert close(r["repeat_low"], est - math.sqrt(2) * max(est - low, t * sd)), r
             assert close(r["repeat_high"], est + math.sqrt(2) * max(high - est, t * sd)), r

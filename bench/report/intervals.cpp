@@ -24,9 +24,9 @@ std::string interval_text(const nlohmann::json& interval, int decimals) {
                      interval["low"].get<double>(), decimals, interval["high"].get<double>(), decimals);
 }
 
-Interval repeat_run(const Interval& confidence, double run_to_run_sd, int earlier_runs) {
+Interval repeat_run(const Interval& confidence, double run_to_run_sd, int degrees_of_freedom) {
   const double widen = std::sqrt(2.0);
-  const double spread = earlier_runs >= 2 ? student_t_975(earlier_runs - 1) * run_to_run_sd : 0;
+  const double spread = degrees_of_freedom >= 1 ? student_t_975(degrees_of_freedom) * run_to_run_sd : 0;
   return {confidence.estimate, confidence.estimate - widen * std::max(confidence.estimate - confidence.low, spread),
           confidence.estimate + widen * std::max(confidence.high - confidence.estimate, spread)};
 }

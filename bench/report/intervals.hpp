@@ -33,18 +33,18 @@ std::string interval_text(const nlohmann::json& interval, int decimals = 1);
 // event than it looks: for calibrated 95% intervals it happens about 83% of the time (|Z| < 1.96 /
 // sqrt(2)), so of 18 figures about 3 miss by chance alone; this interval is the one to hold a
 // repeat run to.
-// `run_to_run_sd`: the standard deviation of this figure's estimates over `earlier_runs` of the
-// machine's earlier runs of the same code and configuration (history::run_to_run_spread), in the
-// figure's units. A shared machine's runs differ by more than one run's rounds can show: over six
+// `run_to_run_sd`: the standard deviation of this figure's estimates over the machine's earlier runs
+// of the same configuration, with `degrees_of_freedom` (history::run_to_run_spread), in the figure's
+// units. A shared machine's runs differ by more than one run's rounds can show: over six
 // default figure9 runs on a 2-core VM the 18 figures spread 1.4x (median; 0.4-2.7x) the standard error
 // each run's own interval implies, while within a run the rounds showed no drift (their batch means
 // varied as independent rounds' would). Where it is wider than this run's own, each side is sqrt(2) *
-// t * run_to_run_sd, t the 97.5% quantile of Student's t with earlier_runs - 1 degrees of freedom (a
+// t * run_to_run_sd, t the 97.5% quantile of Student's t with `degrees_of_freedom` (runs less one; a
 // standard deviation from 3 runs is itself uncertain: t = 4.30 there, 2.26 from 10). It stands for a
 // whole run's uncertainty (rounds and run-level offset), so it replaces this run's side rather than
 // adding to it. Held to 11 default runs (every pair, with 3 or 5 others drawn as its history), pairs
 // agreed on 93% of figures this way, 87-90% with 1.96 in place of t, 68% from the rounds alone.
-Interval repeat_run(const Interval& confidence, double run_to_run_sd = 0, int earlier_runs = 0);
+Interval repeat_run(const Interval& confidence, double run_to_run_sd = 0, int degrees_of_freedom = 0);
 
 // The 97.5% quantile of Student's t distribution with `degrees_of_freedom` (>= 1): its density
 // integrated numerically (Simpson) and the quantile found by bisection, to 1e-6.

@@ -430,10 +430,11 @@ RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::
   // stability: a run of headline figures only (its safe ranges; nothing timed).
   const bool figures_only = schema == "bokehbench.stability" && doc.contains("configurations") &&
                             doc["configurations"].is_array() && doc.contains("context") && doc["context"].is_object();
-  const bool sweep = figures_only || schema.rfind("bokehbench.", 0) == 0 && doc.contains("points") && doc["points"].is_array() &&
-                     doc.contains("context") && doc["context"].is_object() &&
-                     std::all_of(doc["points"].begin(), doc["points"].end(),
-                                 [](const nlohmann::json& p) { return p.is_object() && p.contains("id"); });
+  const bool timed_sweep = schema.rfind("bokehbench.", 0) == 0 && doc.contains("points") && doc["points"].is_array() &&
+                           doc.contains("context") && doc["context"].is_object() &&
+                           std::all_of(doc["points"].begin(), doc["points"].end(),
+                                       [](const nlohmann::json& p) { return p.is_object() && p.contains("id"); });
+  const bool sweep = figures_only || timed_sweep;
   if (!sweep)
     throw std::runtime_error(fmt::format("not the results of a sweep (schema '{}': a sweep file has context and points with "
                                          "ids and samples; memory and kernels are not sweeps)",
@@ -602,57 +603,69 @@ nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent
 
 nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const std::string& sweep, int recent_runs) {
   const nlohmann::json& context = doc.at("context");
-  const std::string machine = machine_key(context), commit = context.value("git_commit", "unknown");
+  const std::string machine = machine_key(context);
   std::set<std::string> point_ids;
   for (const auto& p : doc.at("points")) point_ids.insert(p.at("id").get<std::string>());
-  std::vector<std::int64_t> earlier;  // oldest first
+  std::vector<RunRow> earlier;  // oldest first
   for (const RunRow& run : store.runs()) {
-    if (run.machine != machine || run.commit != commit || run.sweep != sweep || run.status != "complete") continue;
+    if (run.machine != machine || run.sweep != sweep || run.status != "complete") continue;
     std::set<std::string> theirs;
     for (const PointRow& p : store.points(run.id)) theirs.insert(p.point_id);
-    if (theirs == point_ids) earlier.push_back(run.id);
+    if (theirs == point_ids) earlier.push_back(run);
   }
   if (earlier.size() > static_cast<std::size_t>(recent_runs))
     earlier.erase(earlier.begin(), earlier.end() - recent_runs);  // keep the latest
-  std::map<std::string, std::vector<double>> values;
+  // Each figure's values by commit: a commit may change a figure's level, so the spread is taken about
+  // each commit's own mean and pooled (its runs less one degrees of freedom each).
+  std::map<std::string, std::map<std::string, std::vector<double>>> values;
   std::map<std::string, bool> relative;
-  for (std::int64_t id : earlier)
-    for (const HeadlineRow& h : store.headlines(id))
+  for (const RunRow& run : earlier)
+    for (const HeadlineRow& h : store.headlines(run.id))
       if (h.low && (h.unit == "exponent" || (h.unit == "ratio" && h.value > 0))) {
         relative[h.name] = h.unit == "ratio";
-        values[h.name].push_back(relative[h.name] ? std::log(h.value) : h.value);
+        values[h.name][run.commit].push_back(relative[h.name] ? std::log(h.value) : h.value);
       }
   nlohmann::json figures = nlohmann::json::object();
-  for (const auto& [name, v] : values) {
-    if (v.size() < 2) continue;
-    const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  for (const auto& [name, by_commit] : values) {
     double squares = 0;
-    for (double x : v) squares += (x - mean) * (x - mean);
-    const double sd = std::sqrt(squares / static_cast<double>(v.size() - 1));  // the sample's (n - 1)
-    figures[name] = {{"sd", sd}, {"relative", relative[name]}, {"runs", v.size()}};
+    int degrees_of_freedom = 0, runs = 0, commits = 0;
+    for (const auto& [commit, v] : by_commit) {
+      if (v.size() < 2) continue;  // one run of a commit says nothing about its spread
+      const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+      for (double x : v) squares += (x - mean) * (x - mean);
+      degrees_of_freedom += static_cast<int>(v.size()) - 1;
+      runs += static_cast<int>(v.size());
+      ++commits;
+    }
+    if (degrees_of_freedom == 0) continue;
+    figures[name] = {{"sd", std::sqrt(squares / degrees_of_freedom)},
+                     {"relative", relative[name]},
+                     {"runs", runs},
+                     {"commits", commits},
+                     {"degrees_of_freedom", degrees_of_freedom}};
   }
   return {{"earlier_runs", earlier.size()},
-          {"min_earlier_runs", kRunToRunMinRuns},
+          {"min_degrees_of_freedom", kRunToRunMinDegreesOfFreedom},
           {"recent_runs_compared", recent_runs},
-          {"same", "machine, commit, sweep and point ids"},
+          {"same", "machine, sweep and point ids; the spread about each commit's own mean, pooled over commits"},
           {"figures", figures}};
 }
 
 void widen_repeat_intervals(nlohmann::json& doc) {
   if (!doc.contains("measurement") || !doc["measurement"].contains("run_to_run")) return;
-  const nlohmann::json& spread = doc["measurement"]["run_to_run"];
-  if (spread.value("earlier_runs", 0) < kRunToRunMinRuns) return;
+  const nlohmann::json& figures = doc["measurement"]["run_to_run"].value("figures", nlohmann::json::object());
   for (const HeadlineRow& h : headlines_of(doc)) {
-    if (h.at.empty() || !h.low || !spread["figures"].contains(h.name)) continue;
+    if (h.at.empty() || !h.low || !figures.contains(h.name)) continue;
     nlohmann::json& f = doc[nlohmann::json::json_pointer(h.at)];
-    if (!f.contains("repeat_low")) continue;
-    const auto& s = spread["figures"][h.name];
+    const auto& s = figures[h.name];
+    const int degrees_of_freedom = s["degrees_of_freedom"].get<int>();
+    if (!f.contains("repeat_low") || degrees_of_freedom < kRunToRunMinDegreesOfFreedom) continue;
     const double sd = s["sd"].get<double>() * (s["relative"].get<bool>() ? h.value : 1);
-    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd, s["runs"].get<int>());
+    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd, degrees_of_freedom);
     f["repeat_low"] = repeat.low;
     f["repeat_high"] = repeat.high;
     f["run_to_run_sd"] = sd;
-    f["run_to_run_t"] = student_t_975(s["runs"].get<int>() - 1);
+    f["run_to_run_t"] = student_t_975(degrees_of_freedom);
   }
 }
 

@@ -136,17 +136,20 @@ constexpr int kMachineStateMinRuns = 3;
 nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent_runs = 10, double unusual_ratio = 1.3);
 
 // How far this machine's repeat runs put each headline figure: over the same machine's (machine_key)
-// latest `recent_runs` complete runs of sweep `sweep` at the same commit with the same point ids as
-// `doc` (context and points; not yet appended), the standard deviation of each figure that had an
-// interval (ratios: of their logs, a relative spread). {"earlier_runs", "min_earlier_runs",
-// "figures": {name: {"sd", "relative", "runs"}}}. A run's own rounds cannot show this spread (see
-// repeat_run); from kRunToRunMinRuns earlier runs on, widen_repeat_intervals uses it.
-constexpr int kRunToRunMinRuns = 3;
+// latest `recent_runs` complete runs of sweep `sweep` with the same point ids as `doc` (context and
+// points; not yet appended), the standard deviation of each figure that had an interval (ratios: of
+// their logs, a relative spread), taken about each commit's own mean and pooled over the commits with
+// two runs or more, so that a new commit starts from the machine's spread rather than from nothing.
+// {"earlier_runs", "min_degrees_of_freedom", "figures": {name: {"sd", "relative", "runs", "commits",
+// "degrees_of_freedom"}}}. A run's own rounds cannot show this spread (see repeat_run); from
+// kRunToRunMinDegreesOfFreedom on (3 runs of one commit, or 2 each of two), widen_repeat_intervals uses it.
+constexpr int kRunToRunMinDegreesOfFreedom = 2;
 nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const std::string& sweep, int recent_runs = 10);
 
 // Every headline figure of `doc` with a repeat-run interval (figure9's repeat_low/repeat_high) gets
-// it from repeat_run(its interval, the spread of measurement.run_to_run over its runs) and what it
-// used (run_to_run_sd, in its units; run_to_run_t), when the run had kRunToRunMinRuns earlier runs.
+// it from repeat_run(its interval, the spread of measurement.run_to_run, its degrees of freedom) and
+// what it used (run_to_run_sd, in its units; run_to_run_t), where that spread has
+// kRunToRunMinDegreesOfFreedom.
 void widen_repeat_intervals(nlohmann::json& doc);
 
 // A command's run appended to the store at `url` once its results file is written (the file is the

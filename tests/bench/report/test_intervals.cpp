@@ -113,17 +113,18 @@ TEST(Intervals, TheRepeatRunIntervalCoversASecondRunsEstimateAboutAsOftenAsState
 
 // Student's t 97.5% quantile against its closed forms (1 degree of freedom: Cauchy, tan(0.475 pi); 2:
 // 0.95 sqrt(2 / (1 - 0.95^2))), a published table (9: 2.262157) and the normal limit;
-// a repeat-run interval takes t times the earlier runs' spread where that is wider than its own side.
+// a repeat-run interval takes t (for the spread's degrees of freedom) times the earlier runs' spread where
+// that is wider than its own side.
 TEST(Intervals, StudentTQuantileAndTheRunToRunSpread) {
   EXPECT_NEAR(student_t_975(1), std::tan(0.475 * std::acos(-1.0)), 1e-5);
   EXPECT_NEAR(student_t_975(2), 0.95 * std::sqrt(2 / (1 - 0.95 * 0.95)), 1e-5);  // F(t) = 1/2 + t / (2 sqrt(t^2 + 2))
   EXPECT_NEAR(student_t_975(9), 2.262157, 1e-5);
   EXPECT_NEAR(student_t_975(2000), 1.959964, 2e-3);
   EXPECT_THROW(student_t_975(0), std::invalid_argument);
-  const Interval i = repeat_run({2.0, 1.9, 2.2}, 0.05, 3);  // 3 runs: t(2) * 0.05 = 0.215, wider than both sides
+  const Interval i = repeat_run({2.0, 1.9, 2.2}, 0.05, 2);  // 3 runs: t(2) * 0.05 = 0.215, wider than both sides
   EXPECT_NEAR(i.low, 2.0 - std::sqrt(2.0) * student_t_975(2) * 0.05, 1e-12);
   EXPECT_NEAR(i.high, 2.0 + std::sqrt(2.0) * student_t_975(2) * 0.05, 1e-12);
-  const Interval own = repeat_run({2.0, 1.9, 2.2}, 0.05, 1);  // one earlier run has no spread
+  const Interval own = repeat_run({2.0, 1.9, 2.2}, 0.05, 0);  // one earlier run has no spread
   EXPECT_NEAR(own.low, 2.0 - 0.1 * std::sqrt(2.0), 1e-12);
 }
 

@@ -128,10 +128,11 @@ TEST_P(StoreTest, MachineStateComparesTheProbesWithThisMachinesEarlierRuns) {
 }
 
 // run_to_run_spread takes each headline figure's spread over the same machine's earlier complete runs
-// of the same commit and point ids (ratios in logs), and widen_repeat_intervals holds a figure9 ratio
-// and exponent to it once there are kRunToRunMinRuns such runs: the sample standard deviations of
-// known values, and repeat_run's closed form (Student's t with 2 degrees of freedom for 3 runs).
-TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheSameCode) {
+// with the same point ids (ratios in logs), about each commit's own mean and pooled, and
+// widen_repeat_intervals holds a figure9 ratio and exponent to it from kRunToRunMinDegreesOfFreedom
+// on: the sample standard deviations of known values, and repeat_run's closed form (Student's t with 2
+// degrees of freedom for 3 runs of one commit, 3 once another commit has 2 runs).
+TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRuns) {
   auto run_doc = [](const std::string& cpu, const std::string& commit, const std::string& point, int day, double ratio,
                     double exponent, const std::string& status = "complete") {
     return nlohmann::json{
@@ -149,7 +150,8 @@ TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheS
   auto store = Store::open(url_, true);
   const nlohmann::json now = run_doc("EPYC", "c", "p", 20, 2.0, 1.5);
   for (int i = 0; i < 2; ++i) store->append_document(run_doc("EPYC", "c", "p", i + 1, 2.0 + 0.2 * i, 1.0 + 0.1 * i), "x", "run");
-  // None of these is a repeat run of `now`: other code, another machine, other points, not complete.
+  // None of these adds to the spread: one run of other code (a level of its own), another machine, other
+  // points, not complete.
   store->append_document(run_doc("EPYC", "other", "p", 5, 50, 5), "x", "run");
   store->append_document(run_doc("Xeon", "c", "p", 6, 50, 5), "x", "run");
   store->append_document(run_doc("EPYC", "c", "q", 7, 50, 5), "x", "run");
@@ -157,16 +159,16 @@ TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheS
 
   nlohmann::json two = now;
   two["measurement"]["run_to_run"] = run_to_run_spread(*store, now, "figure9");
-  EXPECT_EQ(two["measurement"]["run_to_run"]["earlier_runs"], 2);
+  EXPECT_EQ(two["measurement"]["run_to_run"]["earlier_runs"], 3);  // c twice and `other` once
   widen_repeat_intervals(two);
-  EXPECT_FALSE(two["naive_over_flag"][0].contains("run_to_run_sd")) << "two earlier runs are too few";
+  EXPECT_FALSE(two["naive_over_flag"][0].contains("run_to_run_sd")) << "two runs of one commit are too few";
   EXPECT_EQ(two["naive_over_flag"][0]["repeat_low"], 0) << "left as derive wrote it";
 
   store->append_document(run_doc("EPYC", "c", "p", 3, 2.4, 1.2), "x", "run");
   nlohmann::json doc = now;
   doc["measurement"]["run_to_run"] = run_to_run_spread(*store, now, "figure9");
   const auto& figures = doc["measurement"]["run_to_run"]["figures"];
-  EXPECT_EQ(doc["measurement"]["run_to_run"]["earlier_runs"], 3);
+  EXPECT_EQ(doc["measurement"]["run_to_run"]["earlier_runs"], 4);
   const double mean_log = (std::log(2.0) + std::log(2.2) + std::log(2.4)) / 3;
   const double sd_log = std::sqrt((std::pow(std::log(2.0) - mean_log, 2) + std::pow(std::log(2.2) - mean_log, 2) +
                                    std::pow(std::log(2.4) - mean_log, 2)) / 2);
@@ -192,6 +194,31 @@ TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRunsOfTheS
   widen_repeat_intervals(wide);
   EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_low"].get<double>(), 2.0 - std::sqrt(2.0) * 1.0, 1e-12);
   EXPECT_NEAR(wide["naive_over_flag"][0]["repeat_high"].get<double>(), 2.0 + std::sqrt(2.0) * t * 2.0 * sd_log, 1e-12);
+
+  // A second run of the other commit adds its spread about its own mean (50 and 60, far from 2.0-2.4):
+  // the squares pooled over 2 + 1 degrees of freedom.
+  store->append_document(run_doc("EPYC", "other", "p", 9, 60, 6), "x", "run");
+  nlohmann::json pooled = now;
+  pooled["measurement"]["run_to_run"] = run_to_run_spread(*store, now, "figure9");
+  const auto& p = pooled["measurement"]["run_to_run"]["figures"]["naive_over_flag/gpu/N:9"];
+  const double other_squares = std::pow(std::log(60.0) - std::log(50.0), 2) / 2;
+  EXPECT_NEAR(p["sd"].get<double>(), std::sqrt((2 * sd_log * sd_log + other_squares) / 3), 1e-12);
+  EXPECT_EQ(p["degrees_of_freedom"], 3);
+  EXPECT_EQ(p["commits"], 2);
+  EXPECT_EQ(p["runs"], 5);
+  EXPECT_NEAR(pooled["measurement"]["run_to_run"]["figures"]["exponent/naive/gpu/larger_half"]["sd"].get<double>(),
+              std::sqrt((2 * 0.01 + 0.5) / 3), 1e-12);  // (1.0, 1.1, 1.2) and (5, 6)
+  widen_repeat_intervals(pooled);
+  EXPECT_NEAR(pooled["naive_over_flag"][0]["run_to_run_t"].get<double>(), student_t_975(3), 1e-12);
+
+  // On another machine, two runs each of two commits suffice (2 degrees of freedom), where two of one do not.
+  for (const auto& [commit, day] : {std::pair{"a", 11}, {"a", 12}, {"b", 13}, {"b", 14}})
+    store->append_document(run_doc("Xeon Gold", commit, "p", day, 0.1 * day, 1.0), "x", "run");
+  nlohmann::json two_commits = run_doc("Xeon Gold", "c", "p", 20, 2.0, 1.5);
+  two_commits["measurement"]["run_to_run"] = run_to_run_spread(*store, two_commits, "figure9");
+  EXPECT_EQ(two_commits["measurement"]["run_to_run"]["figures"]["naive_over_flag/gpu/N:9"]["degrees_of_freedom"], 2);
+  widen_repeat_intervals(two_commits);
+  EXPECT_NEAR(two_commits["naive_over_flag"][0]["run_to_run_t"].get<double>(), student_t_975(2), 1e-12);
 }
 
 TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
