@@ -301,7 +301,7 @@ std::string fit_text(double estimate, const nlohmann::json& i) {
 }
 
 // What the repeat-run intervals above rest on: this run's rounds alone, or also the spread of the
-// machine's earlier runs of this code and configuration.
+// machine's earlier runs of this configuration.
 void print_repeat_basis(const nlohmann::json& measurement) {
   if (!measurement.contains("run_to_run")) {
     fmt::print("a repeat run: from this run's rounds alone (no results store to measure how far runs differ)\n");
@@ -315,9 +315,9 @@ void print_repeat_basis(const nlohmann::json& measurement) {
   const int needed = spread.value("min_degrees_of_freedom", history::kRunToRunMinDegreesOfFreedom);
   if (degrees_of_freedom >= needed) {
     fmt::print("a repeat run: where this machine's earlier runs of this configuration ({} runs of {} commit{} in the "
-               "results store; degrees of freedom of their spread about each commit's mean: {}) spread their estimates wider than this "
-               "run's interval, the repeat-run interval is sqrt(2) * t of their standard deviation (t = {:.2f}, "
-               "Student's 97.5%: fewer runs, wider)\n",
+               "results store; degrees of freedom of their spread about each commit's mean: {}) spread their "
+               "estimates wider than this run's interval, the repeat-run interval is sqrt(2) * t of their standard "
+               "deviation (t = {:.2f}, Student's 97.5%: fewer runs, wider)\n",
                most["runs"].get<int>(), most["commits"].get<int>(), most["commits"] == 1 ? "" : "s",
                degrees_of_freedom, student_t_975(degrees_of_freedom));
     return;

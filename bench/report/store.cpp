@@ -658,7 +658,7 @@ void widen_repeat_intervals(nlohmann::json& doc) {
     if (h.at.empty() || !h.low || !figures.contains(h.name)) continue;
     nlohmann::json& f = doc[nlohmann::json::json_pointer(h.at)];
     const auto& s = figures[h.name];
-    const int degrees_of_freedom = s["degrees_of_freedom"].get<int>();
+    const int degrees_of_freedom = s.value("degrees_of_freedom", 0);
     if (!f.contains("repeat_low") || degrees_of_freedom < kRunToRunMinDegreesOfFreedom) continue;
     const double sd = s["sd"].get<double>() * (s["relative"].get<bool>() ? h.value : 1);
     const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd, degrees_of_freedom);

@@ -529,7 +529,7 @@ void append_to_store(const SweepSettings& s, const nlohmann::json& context, cons
 }
 
 // The machine's state during the run against its earlier runs in the store (history::machine_state),
-// and how far its repeat runs of this code and configuration put each headline figure
+// and how far its repeat runs of this configuration put each headline figure
 // (history::run_to_run_spread, which derive reads), before this run is appended; with no store, or
 // none yet, there is nothing to compare with.
 void add_machine_state(const SweepSettings& s, const nlohmann::json& context, nlohmann::json& doc) {
