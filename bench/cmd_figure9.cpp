@@ -101,6 +101,7 @@ struct Figures {
   nlohmann::json series = nlohmann::json::array(), naive_over_flag = nlohmann::json::array();
   std::vector<std::string> unsettled;
   std::set<std::string> needed;  // point_key() of every point an unsettled figure is drawn from
+  nlohmann::json between_processes;  // widen_by_processes(); null for a run of one process
 };
 
 // A figure9 point's identity among the figures' points (one scene and frame size a run).
@@ -156,9 +157,7 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
     const auto at = static_cast<std::ptrdiff_t>(from);
     const PowerLawFit fit = fit_power_law({n.begin() + at, n.end()}, {medians.begin() + at, medians.end()});
     // exponent: the median of the per-round fits (exponent()); coefficient and r^2: the medians' fit.
-    const Interval repeat = repeat_run(b);
     fits[name] = {{"exponent", b.estimate}, {"low", b.low},       {"high", b.high},
-                  {"repeat_low", repeat.low}, {"repeat_high", repeat.high},
                   {"coefficient_ms", fit.coefficient}, {"r_squared", fit.r_squared}, {"points", fit.points},
                   {"N", std::vector<double>(n.begin() + at, n.end())}};
   }
@@ -175,9 +174,138 @@ nlohmann::json curve_json(const std::vector<const RoundPoint*>& pts, Metric metr
           {"median_relative_iqr", iqr[iqr.size() / 2]}, {"fits", fits}, {"pass_fits_larger_half", pass_fits}};
 }
 
-// `headlines_only`: the ratios and larger-half exponents alone (what the stopping rule reads).
+// `points` with only the rounds process `process` measured (round_process: each round's process).
+std::vector<RoundPoint> rounds_of_process(const std::vector<RoundPoint>& points, const std::vector<int>& round_process,
+                                          int process) {
+  const auto keep = [&](const RoundValues& values) {
+    RoundValues out;
+    for (const auto& [round, x] : values)
+      if (round < static_cast<int>(round_process.size()) && round_process[round] == process) out[round] = x;
+    return out;
+  };
+  std::vector<RoundPoint> out;
+  for (const RoundPoint& p : points) {
+    RoundPoint q = p;
+    q.wall_ms = keep(p.wall_ms);
+    q.cpu_ms = keep(p.cpu_ms);
+    for (auto& [pass, values] : q.pass_ms) values = keep(values);
+    if (!q.wall_ms.empty()) out.push_back(std::move(q));
+  }
+  return out;
+}
+
+// A figure with an interval, by name, where `figures` holds it: a ratio (in logs, so that its spread
+// is relative) or an exponent.
+struct FigureAt {
+  std::string backend;
+  bool ratio = false, headline = false;  // headline: a ratio or a larger-half exponent
+  nlohmann::json* at = nullptr;          // estimate (naive_over_flag or exponent), low, high
+  double estimate() const { return (*at)[ratio ? "naive_over_flag" : "exponent"].get<double>(); }
+  double scaled(double x) const { return ratio ? std::log(x) : x; }
+  double unscaled(double x) const { return ratio ? std::exp(x) : x; }
+};
+
+std::map<std::string, FigureAt> figures_at(nlohmann::json& series, nlohmann::json& ratios) {
+  std::map<std::string, FigureAt> out;
+  for (auto& r : ratios)
+    out[fmt::format("naive/FLAG {} N={}", r["backend"].get<std::string>(), r["N"].get<int>())] = {r["backend"], true, true, &r};
+  for (auto& curve : series)
+    for (const char* fit : {"larger_half", "all_sizes"})
+      if (curve["fits"].contains(fit))
+        out[fmt::format("{}{} {} {}", curve["method"].get<std::string>(), curve["variant"].get<std::string>(),
+                        curve["backend"].get<std::string>(), fit)] = {curve["backend"], false, fit == std::string("larger_half"),
+                                                                      &curve["fits"][fit]};
+  return out;
+}
+
 Figures figures(const std::vector<RoundPoint>& points, Metric metric, double target_ratio, double target_exponent,
-                bool headlines_only = false) {
+                bool headlines_only = false, const std::vector<int>& round_process = {});
+
+// A run measured by several processes (processes.hpp): each figure's interval widened by how far the
+// processes' own estimates of it (each from its rounds alone) spread, against the standard errors
+// their intervals imply (half-width / 1.96). The ratio of the two, squared, is pooled over a backend's
+// headline figures (ratios and larger-half exponents; they share the processes, so the offset is
+// judged on many figures, not one), with degrees of freedom the figures times (processes - 1). Each
+// figure's interval then has each side at least t * lambda * its standard error over the processes
+// (mean of their variances / processes), t Student's 97.5% quantile: what a run-level offset the
+// processes drew adds, measured in this run. lambda near 1: the processes agreed as their rounds
+// predicted (the interval grows by t / 1.96 at most); above: they differed by more. Returns the pooled
+// spread per backend.
+nlohmann::json widen_by_processes(nlohmann::json& series, nlohmann::json& ratios, const std::vector<RoundPoint>& points,
+                                  const std::vector<int>& round_process, Metric metric, bool headlines_only) {
+  const int processes = round_process.empty() ? 0 : *std::max_element(round_process.begin(), round_process.end()) + 1;
+  if (processes < 2) return nlohmann::json();
+  std::vector<Figures> per_process;
+  std::vector<std::map<std::string, FigureAt>> per_process_at;
+  per_process.reserve(static_cast<std::size_t>(processes));
+  for (int k = 0; k < processes; ++k) {
+    per_process.push_back(figures(rounds_of_process(points, round_process, k), metric, 1, 1, headlines_only));
+    per_process_at.push_back(figures_at(per_process.back().series, per_process.back().naive_over_flag));
+  }
+  struct Spread {
+    double weighted_z2 = 0;
+    int figures = 0, degrees_of_freedom = 0;
+  };
+  struct Estimates {
+    std::vector<double> estimates;  // scaled
+    double mean_variance = 0;
+  };
+  std::map<std::string, Spread> by_backend;
+  std::map<std::string, Estimates> by_figure;
+  for (auto& [name, whole] : figures_at(series, ratios)) {
+    Estimates e;
+    for (auto& at : per_process_at) {
+      const auto it = at.find(name);
+      if (it == at.end()) continue;
+      const FigureAt& f = it->second;
+      const double se = (f.scaled((*f.at)["high"].get<double>()) - f.scaled((*f.at)["low"].get<double>())) / (2 * 1.96);
+      if (!(se > 0) || !std::isfinite(se)) continue;
+      e.estimates.push_back(f.scaled(f.estimate()));
+      e.mean_variance += se * se;
+    }
+    const auto n = static_cast<double>(e.estimates.size());
+    if (n < 2) continue;
+    e.mean_variance /= n;
+    if (whole.headline) {
+      double mean = 0, ss = 0;
+      for (double x : e.estimates) mean += x / n;
+      for (double x : e.estimates) ss += (x - mean) * (x - mean);
+      Spread& s = by_backend[whole.backend];
+      s.weighted_z2 += ss / e.mean_variance;  // (n - 1) * sample variance / expected variance
+      s.degrees_of_freedom += static_cast<int>(n) - 1;
+      ++s.figures;
+    }
+    by_figure[name] = std::move(e);
+  }
+  nlohmann::json out = nlohmann::json::object();
+  for (auto& [name, whole] : figures_at(series, ratios)) {
+    const auto e = by_figure.find(name);
+    const auto s = by_backend.find(whole.backend);
+    if (e == by_figure.end() || s == by_backend.end() || !(whole.estimate() > 0 || !whole.ratio)) continue;
+    const double lambda = std::sqrt(s->second.weighted_z2 / s->second.degrees_of_freedom);
+    const double half_width = student_t_975(s->second.degrees_of_freedom) * lambda *
+                              std::sqrt(e->second.mean_variance / static_cast<double>(e->second.estimates.size()));
+    nlohmann::json& f = *whole.at;
+    const double centre = whole.scaled(whole.estimate());
+    f["low"] = std::min(f["low"].get<double>(), whole.unscaled(centre - half_width));
+    f["high"] = std::max(f["high"].get<double>(), whole.unscaled(centre + half_width));
+    std::vector<double> estimates;
+    for (double x : e->second.estimates) estimates.push_back(whole.unscaled(x));
+    f["process_estimates"] = estimates;
+  }
+  for (const auto& [backend, s] : by_backend)
+    out[backend] = {{"figures", s.figures},
+                    {"degrees_of_freedom", s.degrees_of_freedom},
+                    {"spread_over_rounds", std::sqrt(s.weighted_z2 / s.degrees_of_freedom)},
+                    {"t", student_t_975(s.degrees_of_freedom)}};
+  return out;
+}
+
+// The figures of one metric with their intervals (see Figures); with `round_process` (a run of
+// several processes) widened by the spread between them (widen_by_processes). `headlines_only`: the
+// ratios and larger-half exponents alone (what the stopping rule reads).
+Figures figures(const std::vector<RoundPoint>& points, Metric metric, double target_ratio, double target_exponent,
+                bool headlines_only, const std::vector<int>& round_process) {
   Figures out;
   std::set<std::string> variants;
   for (const auto& p : points) variants.insert(p.variant);
@@ -190,16 +318,6 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
         if (pts.empty()) continue;
         std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
         nlohmann::json curve = curve_json(pts, metric, headlines_only);
-        if (curve["fits"].contains("larger_half")) {
-          const auto& f = curve["fits"]["larger_half"];
-          const double half_width = (f["high"].get<double>() - f["low"].get<double>()) / 2;
-          if (!(half_width <= target_exponent)) {
-            out.unsettled.push_back(fmt::format("{}{} {} exponent {:.2f} +-{:.2f}", m.name, variant, backend,
-                                                f["exponent"].get<double>(), half_width));
-            for (std::size_t i = pts.size() / 2; i < pts.size(); ++i)
-              out.needed.insert(point_key(pts[i]->method, pts[i]->variant, pts[i]->backend, pts[i]->n));
-          }
-        }
         curve.update({{"method", m.name}, {"variant", variant}, {"backend", backend}, {"time", time_of(*pts.front(), metric)}});
         out.series.push_back(std::move(curve));
       }
@@ -210,19 +328,35 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
       if (b.method != "flag" || !b.variant.empty() || b.backend != a.backend || b.n != a.n) continue;
       // Over the rounds that hold both (a point leaves the rounds once its figures have settled).
       const Interval r = paired_ratio_interval(values_of(a, metric), values_of(b, metric)).value_or(Interval{});
-      const bool settled = r.relative_half_width() <= target_ratio;
-      const Interval repeat = repeat_run(r);
       out.naive_over_flag.push_back({{"N", a.n}, {"backend", a.backend}, {"time", time_of(a, metric)},
-                                     {"naive_over_flag", r.estimate},
-                                     {"low", r.low}, {"high", r.high}, {"repeat_low", repeat.low},
-                                     {"repeat_high", repeat.high}, {"settled", settled}});
-      if (!settled) {
-        out.unsettled.push_back(fmt::format("naive/FLAG {} N={} {:.2f} +-{:.1f}%", a.backend, a.n, r.estimate,
-                                            100 * r.relative_half_width()));
-        out.needed.insert(point_key(a.method, a.variant, a.backend, a.n));
-        out.needed.insert(point_key(b.method, b.variant, b.backend, b.n));
-      }
+                                     {"naive_over_flag", r.estimate}, {"low", r.low}, {"high", r.high}});
     }
+  }
+  out.between_processes = widen_by_processes(out.series, out.naive_over_flag, points, round_process, metric, headlines_only);
+  // Each figure's repeat-run interval, and which are wider than their targets (and the points they need).
+  for (auto& curve : out.series)
+    for (auto& [name, f] : curve["fits"].items()) {
+      const Interval repeat = repeat_run({f["exponent"], f["low"], f["high"]});
+      f["repeat_low"] = repeat.low;
+      f["repeat_high"] = repeat.high;
+      const double half_width = (f["high"].get<double>() - f["low"].get<double>()) / 2;
+      if (name != "larger_half" || half_width <= target_exponent) continue;
+      out.unsettled.push_back(fmt::format("{}{} {} exponent {:.2f} +-{:.2f}", curve["method"].get<std::string>(),
+                                          curve["variant"].get<std::string>(), curve["backend"].get<std::string>(),
+                                          f["exponent"].get<double>(), half_width));
+      for (int n : f["N"].get<std::vector<int>>())
+        out.needed.insert(point_key(curve["method"], curve["variant"], curve["backend"], n));
+    }
+  for (auto& r : out.naive_over_flag) {
+    const Interval interval{r["naive_over_flag"], r["low"], r["high"]};
+    const Interval repeat = repeat_run(interval);
+    const bool settled = interval.relative_half_width() <= target_ratio;
+    r.update({{"repeat_low", repeat.low}, {"repeat_high", repeat.high}, {"settled", settled}});
+    if (settled) continue;
+    out.unsettled.push_back(fmt::format("naive/FLAG {} N={} {:.2f} +-{:.1f}%", r["backend"].get<std::string>(),
+                                        r["N"].get<int>(), interval.estimate, 100 * interval.relative_half_width()));
+    for (const char* method : {"naive", "flag"})
+      out.needed.insert(point_key(method, "", r["backend"], r["N"]));
   }
   return out;
 }
@@ -270,8 +404,9 @@ void add_unclipped_fits(nlohmann::json& doc) {
 // (what a user waits for). The probes' drift says how steady the machine was.
 void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
   const std::vector<RoundPoint> points = round_points(doc["points"], doc.at("context").value("device", nlohmann::json()));
-  const Figures lead = figures(points, Metric::lead, target_ratio, target_exponent);
-  const Figures wall = figures(points, Metric::wall, target_ratio, target_exponent);
+  const std::vector<int> round_process = doc["measurement"].value("round_process", std::vector<int>{});
+  const Figures lead = figures(points, Metric::lead, target_ratio, target_exponent, false, round_process);
+  const Figures wall = figures(points, Metric::wall, target_ratio, target_exponent, false, round_process);
   doc["series"] = lead.series;
   doc["naive_over_flag"] = lead.naive_over_flag;
   doc["headlines"] = {
@@ -291,6 +426,14 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
       {"stop_reason", doc["measurement"]["stop_reason"]},
       {"probe_drift", probe_drift(doc["measurement"])},
       {"wall_time", {{"series", wall.series}, {"naive_over_flag", wall.naive_over_flag}, {"unsettled", wall.unsettled}}}};
+  if (!lead.between_processes.is_null())
+    doc["headlines"]["between_processes"] = {
+        {"why", "the run was measured by several processes one after another (measurement.round_process): each "
+                "figure's interval has each side at least t * spread_over_rounds * its standard error over the "
+                "processes, spread_over_rounds the processes' estimates' spread against what their own intervals "
+                "imply, pooled over a backend's headline figures (Student's t for its degrees of freedom): a run-level "
+                "offset that rounds within one process share and cannot show (processes.hpp)"},
+        {"backends", lead.between_processes}};
   add_unclipped_fits(doc);
   history::widen_repeat_intervals(doc);
 }
@@ -327,6 +470,24 @@ void print_repeat_basis(const nlohmann::json& measurement) {
              "commit or 2 each of two, to measure how far runs differ). Runs on a shared machine can differ by more "
              "than their rounds show: expect some repeat-run estimates outside these intervals\n",
              spread.value("earlier_runs", 0), degrees_of_freedom, needed);
+}
+
+// How far the run's processes put the figures apart, against what their rounds imply.
+void print_between_processes(const nlohmann::json& headlines) {
+  if (!headlines.contains("between_processes")) {
+    fmt::print("one process measured every round: its intervals cannot show an offset between processes (runs), "
+               "which --processes 2 or more measures\n");
+    return;
+  }
+  std::vector<std::string> spreads;
+  for (const auto& [backend, s] : headlines["between_processes"]["backends"].items())
+    spreads.push_back(fmt::format("{} {:.2f} ({} figures, {} degrees of freedom, t = {:.2f})", backend,
+                                  s["spread_over_rounds"].get<double>(), s["figures"].get<int>(),
+                                  s["degrees_of_freedom"].get<int>(), s["t"].get<double>()));
+  fmt::print("between processes: their estimates spread {} times what their own rounds imply; every interval above "
+             "has each side at least t times that times its standard error over the processes (above 1: an offset "
+             "between processes that one process's rounds do not show)\n",
+             fmt::join(spreads, ", "));
 }
 
 void print_summary(const nlohmann::json& doc) {
@@ -371,6 +532,7 @@ void print_summary(const nlohmann::json& doc) {
                  w["high"].get<double>());
     fmt::print("\n");
   }
+  print_between_processes(doc["headlines"]);
   print_repeat_basis(doc["measurement"]);
   // The ratios move with the machine's memory speed (README, "Do two runs agree?"): say what it was.
   if (const auto& limits = doc["measurement"].value("limits", nlohmann::json::object());
@@ -403,6 +565,7 @@ void print_summary(const nlohmann::json& doc) {
 
 void figure9(Figure9Options& o) {
   o.axes.resolve(&o.sweep);
+  if (o.axes.quick && o.sweep.processes_option->count() == 0) o.sweep.processes = 1;  // a check of the mechanics
   if (o.axes.methods.empty()) o.axes.methods = {"naive", "flag"};  // the paper's figure
   if (o.axes.methods == std::vector<std::string>{"all"}) o.axes.methods = default_sweep_methods();
   if (!(o.target_ratio_pct > 0) || !(o.target_exponent > 0))
@@ -489,6 +652,8 @@ void add_figure9_command(CLI::App& app) {
   a.backends = {"gpu", "cpu"};
   a.add_to(cmd, {Axis::sizes, Axis::methods, Axis::backends, Axis::precisions}, {Axis::resolutions, Axis::scenes});
   o->method_options.add_to(cmd);
+  // Two processes: a first run on a fresh machine then carries the offset between runs (processes.hpp).
+  o->sweep.processes = 2;
   o->sweep.add_to(cmd, 300);
   cmd->add_option("--target-ratio-pct", o->target_ratio_pct,
                   "Measure until each naive/FLAG ratio's 95% interval is within +-this % (or the budget is spent)")

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "method.hpp"
+#include "processes.hpp"
 #include "scene.hpp"
 #include "store.hpp"
 #include "sweep.hpp"
@@ -292,6 +293,14 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
                   "Results store the run is appended to: a file (SQLite) or postgresql://user@host/db (default: "
                   "OUT_DIR/history.sqlite)");
   cmd->add_flag("--no-store", no_store, "Append the run to no results store");
+  processes_option = cmd->add_option("--processes", processes,
+                                     "Measure in this many processes one after another, each for the budget's share, "
+                                     "their rounds joined: figures then carry the spread between processes, which "
+                                     "one process's rounds cannot show (README, \"Do two runs agree?\")")
+                         ->check(CLI::Range(1, 16))
+                         ->capture_default_str();
+  // Internal: how a run of several processes starts each of them (processes.hpp).
+  cmd->add_option("--process", process, "Internal (--processes): this is process k of P")->group("");
   // Internal: how `bokehbench ab` starts the two builds it compares (answers on stdin, not for people).
   cmd->add_flag("--serve", serve, "Internal (bokehbench ab): time samples on request over stdin/stdout")->group("");
 }
@@ -319,6 +328,17 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.shard_count = count;
   // A worker of `ab` writes nothing; tests of `compare` (injected slowdowns) are not history.
   if (!no_store && !serve && inject_slowdown_pct == 0) s.store_url = store.empty() ? history::default_store_url(out_dir) : store;
+  s.processes = serve ? 1 : processes;  // a worker of `ab` is one process by its nature
+  if (!process.empty()) {  // process k of P: its share of the budget and its own order, into its own folder only
+    const auto [k, count] = parse_shard(process, "--process");
+    s.process_index = k;
+    s.processes = 1;
+    s.policy.budget_s = budget_s / count;
+    s.policy.seed = seed + static_cast<unsigned>(k - 1);
+    s.out_dir = processes::part_dir(out_dir, name, k);
+    s.plot = false;
+    s.store_url.clear();
+  }
   return s;
 }
 

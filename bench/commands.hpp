@@ -92,6 +92,9 @@ struct SweepFlags {
   std::string shard = "1/1";     // --shard i/n (parse_shard)
   std::string store;             // --store URL; empty: <out_dir>/history.sqlite
   bool no_store = false;         // --no-store: append nothing
+  int processes = 1;             // --processes P (processes.hpp)
+  std::string process;           // --process k/P: this is process k of such a run (internal)
+  CLI::Option* processes_option = nullptr;
   // The shard as axes take it (call after parsing; throws std::invalid_argument naming --shard).
   void apply_shard(Axes& axes) const;
   CLI::Option* budget_option = nullptr;

@@ -52,8 +52,12 @@ def median_interval(values):
     return median, x[k - 1], x[n - k]
 
 
-def close(a, b):
-    return abs(a - b) <= 1e-9 * max(1.0, abs(b))
+def close(a, b, relative=1e-9):
+    return abs(a - b) <= relative * max(1.0, abs(b))
+
+
+# Figures widened by Student's t: the table's 6 decimals against the C++ quantile's numerical integration.
+T_TABLE_CLOSE = 1e-6
 
 
 def intervals(d):
@@ -99,7 +103,89 @@ def intervals(d):
 
 # Student's t distribution, 97.5% quantile by degrees of freedom (published tables).
 STUDENT_T_975 = {1: 12.706205, 2: 4.302653, 3: 3.182446, 4: 2.776445, 5: 2.570582, 6: 2.446912, 7: 2.364624,
-                 8: 2.306004, 9: 2.262157}
+                 8: 2.306004, 9: 2.262157, 10: 2.228139, 11: 2.200985, 12: 2.178813, 13: 2.160369, 14: 2.144787,
+                 15: 2.131450, 16: 2.119905, 17: 2.109816, 18: 2.100922, 19: 2.093024, 20: 2.085963}
+
+
+def exponent_interval(curve, rounds):
+    """A curve's larger-half growth exponent: the least-squares slope of log t on log N fitted to each round that
+    holds every point of the larger half, the median of those with its interval. curve: [(N, {round: ms})]."""
+    curve = sorted(curve)[len(curve) // 2:]
+    xs = [math.log(n) for n, _ in curve]
+    mx = sum(xs) / len(xs)
+    slopes = []
+    for r in curve[0][1]:
+        ys = [v.get(r, 0) for _, v in curve]
+        if r in rounds and all(y > 0 for y in ys):
+            ly = [math.log(y) for y in ys]
+            my = sum(ly) / len(ly)
+            slopes.append(sum((x - mx) * (y - my) for x, y in zip(xs, ly)) / sum((x - mx) ** 2 for x in xs))
+    return median_interval(slopes) if slopes else None
+
+
+def headline_figures(d, lead, rounds):
+    """The run's headline figures from `rounds` alone, by name: naive/FLAG at each N and backend (a ratio, judged in
+    logs) and each curve's larger-half exponent: {name: (backend, is_ratio, (estimate, low, high))}."""
+    software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
+    field = lambda backend: "samples_cpu_ms" if lead and (backend == "cpu" or software) else "samples_ms"
+    by_round = lambda p: {r: ms for r, ms in zip(p["sample_rounds"], p[field(p["backend"])]) if r in rounds}
+    out, curves = {}, {}
+    for p in d["points"]:
+        curves.setdefault((p["method"], p.get("variant", ""), p["backend"]), []).append((p["N"], by_round(p)))
+    for (method, variant, backend), curve in curves.items():
+        if len(curve) - len(curve) // 2 >= 2 and (e := exponent_interval(curve, rounds)):
+            out[f"{method}{variant} {backend} larger_half"] = (backend, False, e)
+    for (method, variant, backend), curve in curves.items():
+        if method != "naive" or variant:
+            continue
+        flag = dict(curves.get(("flag", "", backend), []))
+        for n, a in curve:
+            paired = [ms / flag[n][r] for r, ms in a.items() if r in flag.get(n, {})]
+            if paired:
+                out[f"naive/FLAG {backend} N={n}"] = (backend, True, median_interval(paired))
+    return out
+
+
+def widened_by_processes(d, lead):
+    """A run of several processes (measurement.round_process): each headline figure's interval recomputed from
+    the samples as derive_figure9 widens it. Per process, each figure from its rounds alone, with its standard
+    error (half-width / 1.96; ratios in logs); per backend, the processes' spread against those errors pooled
+    over its figures (lambda^2 = sum of (n - 1) s^2 / mean variance over sum of (n - 1)); each side of the whole
+    run's interval at least t * lambda * sqrt(mean variance / n). {name: (estimate, low, high)}, {} for one process."""
+    owner = d["measurement"].get("round_process")
+    if not owner or max(owner) == 0:
+        return {}
+    processes = max(owner) + 1
+    whole = headline_figures(d, lead, set(range(len(owner))))
+    parts = [headline_figures(d, lead, {r for r, k in enumerate(owner) if k == p}) for p in range(processes)]
+    scale = lambda ratio, x: math.log(x) if ratio else x
+    pooled, stats = {}, {}
+    for name, (backend, ratio, _) in whole.items():
+        estimates, variances = [], []
+        for part in parts:
+            if name in part:
+                est, low, high = part[name][2]
+                se = (scale(ratio, high) - scale(ratio, low)) / (2 * 1.96)
+                if se > 0:
+                    estimates.append(scale(ratio, est))
+                    variances.append(se * se)
+        if len(estimates) < 2:
+            continue
+        n, mean_variance = len(estimates), sum(variances) / len(variances)
+        mean = sum(estimates) / n
+        z2, dof = pooled.get(backend, (0.0, 0))
+        pooled[backend] = (z2 + sum((x - mean) ** 2 for x in estimates) / mean_variance, dof + n - 1)
+        stats[name] = (n, mean_variance)
+    out = {}
+    for name, (backend, ratio, (est, low, high)) in whole.items():
+        if name not in stats:
+            continue
+        z2, dof = pooled[backend]
+        n, mean_variance = stats[name]
+        half_width = STUDENT_T_975[dof] * math.sqrt(z2 / dof) * math.sqrt(mean_variance / n)
+        back = math.exp if ratio else (lambda x: x)
+        out[name] = (est, min(low, back(scale(ratio, est) - half_width)), max(high, back(scale(ratio, est) + half_width)))
+    return out
 
 
 def figure9(d):
@@ -112,16 +198,25 @@ def figure9(d):
     field = {"process CPU time": "samples_cpu_ms", "wall-clock time": "samples_ms"}
     points = {(p["method"], p["backend"], p["N"]): p for p in d["points"] if not p.get("variant")}
     spread = d["measurement"].get("run_to_run", {})
-    checked = widened = 0
+    checked = widened = between = 0
     for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
+        processes = widened_by_processes(d, lead)
+        for s in figures["series"]:  # a run of several processes: its exponents widened as derive_figure9 does
+            name = f"{s['method']}{s.get('variant', '')} {s['backend']} larger_half"
+            if name in processes:
+                fit = s["fits"]["larger_half"]
+                got = (fit["exponent"], fit["low"], fit["high"])
+                assert all(close(g, w, T_TABLE_CLOSE) for g, w in zip(got, processes[name])), \
+                    (name, fit, processes[name])
+                between += 1
         for r in figures["naive_over_flag"]:
             want_time = "process CPU time" if lead and (r["backend"] == "cpu" or software) else "wall-clock time"
             assert r["time"] == want_time, (r, want_time)
             a, b = (points[(m, r["backend"], r["N"])] for m in ("naive", "flag"))
             b_ms = dict(zip(b["sample_rounds"], b[field[r["time"]]]))
             paired = [ms / b_ms[k] for k, ms in zip(a["sample_rounds"], a[field[r["time"]]]) if k in b_ms]
-            est, low, high = median_interval(paired)
-            assert all(close(g, w) for g, w in zip((r["naive_over_flag"], r["low"], r["high"]), (est, low, high))), (r, est)
+            est, low, high = processes.get(f"naive/FLAG {r['backend']} N={r['N']}", median_interval(paired))
+            assert all(close(g, w, T_TABLE_CLOSE) for g, w in zip((r["naive_over_flag"], r["low"], r["high"]), (est, low, high))), (r, est)
             # The repeat-run interval: sqrt(2) wider, or sqrt(2) * t * the spread of this machine's earlier runs
             # of the same points where that is wider (measurement.run_to_run; ratios' spread is of their logs; t:
             # Student's 97.5% quantile for its degrees of freedom, from the published table).
@@ -134,9 +229,10 @@ def figure9(d):
                 assert abs(t - STUDENT_T_975[spread_of["degrees_of_freedom"]]) < 1e-5, r
                 widened += 1
             assert close(r.get("run_to_run_sd", 0), sd), (r, sd)
-            assert close(r["repeat_low"], est - math.sqrt(2) * max(est - low, t * sd)), r
-            assert close(r["repeat_high"], est + math.sqrt(2) * max(high - est, t * sd)), r
+            assert close(r["repeat_low"], est - math.sqrt(2) * max(est - low, t * sd), T_TABLE_CLOSE), r
+            assert close(r["repeat_high"], est + math.sqrt(2) * max(high - est, t * sd), T_TABLE_CLOSE), r
             checked += 1
+            between += f"naive/FLAG {r['backend']} N={r['N']}" in processes
         for s in figures["series"]:
             if s.get("variant"):
                 continue
@@ -144,7 +240,10 @@ def figure9(d):
                 p = points[(s["method"], s["backend"], int(n))]
                 assert close(median, median_interval(p[field[s["time"]]])[0]), (s["method"], s["backend"], n)
     assert checked, "no naive/FLAG ratio to check"
-    print(checked, "naive/FLAG ratios (", widened, "repeat-run intervals by the spread of earlier runs ) and the curves' "
+    owner = d["measurement"].get("round_process", [0])
+    assert (max(owner) > 0) == (between > 0), "a run of several processes widens its figures by their spread"
+    print(checked, "naive/FLAG ratios (", widened, "repeat-run intervals by the spread of earlier runs,", between,
+          "figures widened by the spread between", max(owner) + 1, "processes ) and the curves' "
           "medians check against the samples, in",
           sorted({s["time"] + " (" + s["backend"] + ")" for s in d["series"]}))
 

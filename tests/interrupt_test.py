@@ -5,7 +5,8 @@ usage: interrupt_test.py BOKEHBENCH WORKDIR
 
 A small CPU-only figure9 sweep is run to completion once, then killed at random points with SIGTERM
 and SIGKILL, interrupted by a group-wide SIGINT (sent twice at once, as `timeout -s INT` and a
-terminal do), and run twice at once into the same --out-dir. After each, every *.json file in the
+terminal do), run as two processes (--processes 2) and interrupted while the second measures, and
+run twice at once into the same --out-dir. After each, every *.json file in the
 folder must parse, and figure9.json must still be a complete result: a run never replaces a complete
 result with a partial one. The results store they all append to holds only whole runs (complete or
 interrupted), the concurrent ones included. Bounded: about a dozen runs of a few seconds each.
@@ -86,6 +87,31 @@ def main(bokehbench, workdir):
     assert partial["status"] == "interrupted", partial["status"]
     print(f"group SIGINT: exit 1, partial file with {len(partial['points'])} points; files "
           f"{check_folder(out_dir, 'group SIGINT')}")
+
+    # A run of two processes (--processes 2) interrupted while its second measures, by a group-wide SIGINT (a
+    # terminal's Ctrl-C) and by a SIGTERM to the first process alone (which passes it on): the finished process's
+    # rounds are kept, joined with what the second measured, in the partial file.
+    for group in (True, False):
+        proc = subprocess.Popen(command(300) + ["--processes", "2"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True, start_new_session=True)
+        lines, second = [], False
+        for line in proc.stdout:
+            lines.append(line)
+            second = second or line.startswith("== process 2 of 2")
+            if second and line.startswith("[  1/"):
+                break
+        if group:
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.send_signal(signal.SIGTERM)
+        out = "".join(lines) + proc.communicate(timeout=120)[0]
+        how = "group SIGINT" if group else "SIGTERM to the first process"
+        assert proc.returncode == 1 and "interrupted after" in out, f"{how}: exit {proc.returncode}\n{out}"
+        partial = json.loads((out_dir / "figure9.partial.json").read_text())
+        owner = partial["measurement"]["round_process"]
+        assert partial["status"] == "interrupted" and owner.count(0) >= 5, (how, partial["status"], owner)
+        print(f"two processes, {how} during the second: exit 1, partial file with rounds by process {owner}; files "
+              f"{check_folder(out_dir, how)}")
 
     # Two runs into one folder at once: both finish and every file is valid.
     procs = [subprocess.Popen(command(200 + i), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

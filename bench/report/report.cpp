@@ -274,6 +274,10 @@ std::string& command_line_text() {
   static std::string text;
   return text;
 }
+std::vector<std::string>& command_line_list() {
+  static std::vector<std::string> words;
+  return words;
+}
 }  // namespace
 
 void set_command_line(int argc, char** argv) {
@@ -284,8 +288,10 @@ void set_command_line(int argc, char** argv) {
     text += (i ? " " : "") + arg;
   }
   command_line_text() = text;
+  command_line_list().assign(argv, argv + argc);
 }
 
 const std::string& command_line() { return command_line_text(); }
+const std::vector<std::string>& command_line_words() { return command_line_list(); }
 
 }  // namespace bokeh

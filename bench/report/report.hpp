@@ -46,6 +46,7 @@ void write_text_atomically(const std::string& path, const std::string& text);
 // The command line of this process (main() records it): what the results store says ran.
 void set_command_line(int argc, char** argv);
 const std::string& command_line();
+const std::vector<std::string>& command_line_words();  // argv as given (a run restarts itself in processes)
 
 // Creates the parent directory of `path` if needed.
 void ensure_parent_dir(const std::string& path);

@@ -79,6 +79,7 @@ struct PointRecord {
 struct RunRecord {
   std::vector<PointRecord> points;
   std::vector<std::vector<std::size_t>> round_order;   // per round, the point indices in visiting order
+  std::vector<int> round_process;  // per round, the process (0-based) that measured it (processes.hpp); empty: one
   std::map<std::string, std::vector<double>> probe_ms;  // per probe, one time per round
   std::map<std::string, std::vector<double>> probe_cpu_ms;  // per probe, its process CPU time per round
   std::string status = "partial";                       // partial (running), complete, interrupted

@@ -20,6 +20,7 @@
 #include "parallel.hpp"
 #include "report.hpp"
 #include "paired.hpp"
+#include "processes.hpp"
 #include "run.hpp"
 #include "store.hpp"
 #include "targets.hpp"
@@ -124,9 +125,9 @@ std::string point_id(const SweepPoint& p) {
 
 }  // namespace
 
-std::pair<int, int> parse_shard(const std::string& text) {
+std::pair<int, int> parse_shard(const std::string& text, const std::string& flag) {
   const auto bad = [&] {
-    return std::invalid_argument("--shard '" + text + "' is not of the form i/n with 1 <= i <= n (e.g. 2/3: the second of three)");
+    return std::invalid_argument(flag + " '" + text + "' is not of the form i/n with 1 <= i <= n (e.g. 2/3: the second of three)");
   };
   const auto slash = text.find('/');
   if (slash == std::string::npos) throw bad();
@@ -255,6 +256,13 @@ nlohmann::json identity_json(const SweepPoint& p) {
           {"variant", p.variant},
           {"max_coc_px", p.max_coc_px},
           {"aperture", aperture_json(o.aperture)}};
+}
+
+// What a results entry of a point (point_json) knows beyond its samples: how a run measured by
+// several processes takes it from the process that measured it.
+PointInfo info_of(const nlohmann::json& point) {
+  return {point.value("f_stop", 0.0), point.at("memory"), point.at("work"), point.at("error"),
+          point.value("counters", nlohmann::json::object()), point.value("stats", nlohmann::json::object())};
 }
 
 // The one serialisation of a measured point.
@@ -472,11 +480,13 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
       {"lead_in_ms", policy.lead_in_ms},
       {"extra_work_fraction", policy.extra_work_fraction},
       {"rounds", rec.round_order.size()},
+      {"processes", s.processes},
       {"stop_reason", rec.stop_reason},
       {"round_order", order},
       {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "
                  "means), after warm-up; cpu: wall clock of the CPU reference, CoC pass included; "
                  "samples_cpu_ms: the process CPU time (all threads) per frame over the same sample"}};
+  if (!rec.round_process.empty()) measurement["round_process"] = rec.round_process;
   add_probes_and_limits(measurement, measured, calibration, rec);
   nlohmann::json config = s.config;
   if (s.shard_count > 1) config["shard"] = fmt::format("{}/{}", s.shard_index, s.shard_count);
@@ -708,16 +718,25 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   if (s.points_needed)
     hooks.points_needed = [&](const runner::RunRecord& record) { return s.points_needed(record, context); };
 
-  fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s\n", s.name, points.size(),
+  fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s{}\n", s.name, points.size(),
              measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
-             s.policy.budget_s);
+             s.policy.budget_s,
+             s.processes > 1 ? fmt::format(" over {} processes one after another", s.processes)
+             : s.process_index > 0 ? fmt::format(" (process {}, --process)", s.process_index) : "");
   for (std::size_t i = 0; i < points.size(); ++i)
     if (!skip[i].empty()) fmt::print("  skipped {}: {}\n", points[i].id, skip[i]);
 
   runner::RunRecord record;
   {
     runner::InterruptScope interrupts;
-    record = runner::run(names, skip, policy, hooks);
+    if (s.processes > 1) {
+      processes::Joined joined = processes::run(names, s);
+      record = std::move(joined.record);
+      for (std::size_t i = 0; i < points.size(); ++i)
+        if (const auto& p = joined.points[i]; !p.is_null()) info[i] = info_of(p);
+    } else {
+      record = runner::run(names, skip, policy, hooks);
+    }
   }
   context["power_state"]["end"] = power_state(ctx ? &ctx->info() : nullptr);
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
@@ -747,9 +766,11 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   append_to_store(s, context, doc);
   std::filesystem::remove(files.partial_json);
   std::filesystem::remove(files.gbench_partial);
-  if (s.summary) s.summary(doc);
-  print_noise(doc["measurement"]);
-  print_machine_state(doc["measurement"]);
+  if (s.process_index == 0) {  // one process of several: the run that joins them reads the figures
+    if (s.summary) s.summary(doc);
+    print_noise(doc["measurement"]);
+    print_machine_state(doc["measurement"]);
+  }
   fmt::print("wrote {} and {} ({})\n", files.final_json, files.gbench, duration_text(elapsed_s()));
   if (s.plot && !s.plot_script.empty())
     run_plot_script(s.plot_script, files.final_json, (std::filesystem::path(s.plots_dir) / s.name).string());

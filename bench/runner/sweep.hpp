@@ -58,8 +58,8 @@ struct Axes {
   int shard_index = 1, shard_count = 1;
 };
 
-// "i/n" with 1 <= i <= n (--shard); throws std::invalid_argument naming the text.
-std::pair<int, int> parse_shard(const std::string& text);
+// "i/n" with 1 <= i <= n (--shard, --process); throws std::invalid_argument naming the flag and the text.
+std::pair<int, int> parse_shard(const std::string& text, const std::string& flag = "--shard");
 // What stays together in one shard: a point's id less its method and variant, so the points a
 // command compares with each other (naive and FLAG at one N, adaptive off and on) are measured on
 // one machine, in the same rounds, and no ratio mixes two machines.
@@ -96,6 +96,9 @@ struct SweepSettings {
   nlohmann::json config = nlohmann::json::object();  // the command's own settings, recorded as they are
   // The shard this run measures (recorded in config.shard as "i/n" when shard_count > 1).
   int shard_index = 1, shard_count = 1;
+  // > 1: the run is measured by this many processes one after another (processes.hpp), each this same
+  // command line with --process k/P (process_index k, 0 in the run that joins them).
+  int processes = 1, process_index = 0;
   // The results store the run is appended to (store.hpp); empty: none.
   std::string store_url;
   // A further reference for some points (e.g. full-resolution f32 FLAG for `buffers`): the point's
