@@ -556,8 +556,13 @@ void print_summary(const nlohmann::json& doc) {
     return;
   }
   const std::string drift = probe_drift_text(h["probe_drift"]);
+  // A process stops when its own rounds settle; the spread between processes can still widen the joined figures.
+  const bool widened = stop == "headlines settled" || stop == "every point settled";
   fmt::print("NOT SETTLED ({} after {} rounds): the machine was too noisy for these figures at the targets ({}):\n",
-             stop, doc["measurement"]["rounds"].get<int>(), targets);
+             widened ? "each process settled on its own rounds; the spread between processes widened the joined "
+                       "intervals"
+                     : stop,
+             doc["measurement"]["rounds"].get<int>(), targets);
   for (const auto& u : h["unsettled"]) fmt::print("  {}\n", u.get<std::string>());
   fmt::print("  probes drifted (max - min over median, per round): {}; a longer --budget-s or a quieter machine "
              "narrows them\n", drift.empty() ? "not measured" : drift);

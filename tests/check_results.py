@@ -151,10 +151,11 @@ def widened_by_processes(d, lead):
     the samples as derive_figure9 widens it. Per process, each figure from its rounds alone, with its standard
     error (half-width / 1.96; ratios in logs); per backend, the processes' spread against those errors pooled
     over its figures (lambda^2 = sum of (n - 1) s^2 / mean variance over sum of (n - 1)); each side of the whole
-    run's interval at least t * lambda * sqrt(mean variance / n). {name: (estimate, low, high)}, {} for one process."""
+    run's interval at least t * lambda * sqrt(mean variance / n). {name: (estimate, low, high)} and
+    {backend: (lambda, degrees of freedom)}; both empty for one process."""
     owner = d["measurement"].get("round_process")
     if not owner or max(owner) == 0:
-        return {}
+        return {}, {}
     processes = max(owner) + 1
     whole = headline_figures(d, lead, set(range(len(owner))))
     parts = [headline_figures(d, lead, {r for r, k in enumerate(owner) if k == p}) for p in range(processes)]
@@ -185,7 +186,7 @@ def widened_by_processes(d, lead):
         half_width = STUDENT_T_975[dof] * math.sqrt(z2 / dof) * math.sqrt(mean_variance / n)
         back = math.exp if ratio else (lambda x: x)
         out[name] = (est, min(low, back(scale(ratio, est) - half_width)), max(high, back(scale(ratio, est) + half_width)))
-    return out
+    return out, {backend: (math.sqrt(z2 / dof), dof) for backend, (z2, dof) in pooled.items()}
 
 
 def figure9(d):
@@ -200,7 +201,15 @@ def figure9(d):
     spread = d["measurement"].get("run_to_run", {})
     checked = widened = between = 0
     for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
-        processes = widened_by_processes(d, lead)
+        processes, spread_between = widened_by_processes(d, lead)
+        if lead:  # the spread the run reports is the one its samples give
+            reported = d["headlines"].get("between_processes", {}).get("backends", {})
+            assert sorted(reported) == sorted(spread_between), (reported, spread_between)
+            for backend, (ratio_of_spreads, dof) in spread_between.items():
+                got = reported[backend]
+                assert got["degrees_of_freedom"] == dof and close(got["spread_over_rounds"], ratio_of_spreads, T_TABLE_CLOSE), \
+                    (backend, got, ratio_of_spreads, dof)
+                assert abs(got["t"] - STUDENT_T_975[dof]) < 1e-5, (backend, got)
         for s in figures["series"]:  # a run of several processes: its exponents widened as derive_figure9 does
             name = f"{s['method']}{s.get('variant', '')} {s['backend']} larger_half"
             if name in processes:
