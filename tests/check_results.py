@@ -207,8 +207,8 @@ def figure9(d):
             assert sorted(reported) == sorted(spread_between), (reported, spread_between)
             for backend, (ratio_of_spreads, dof) in spread_between.items():
                 got = reported[backend]
-                assert got["degrees_of_freedom"] == dof and close(got["spread_over_rounds"], ratio_of_spreads, T_TABLE_CLOSE), \
-                    (backend, got, ratio_of_spreads, dof)
+                assert got["degrees_of_freedom"] == dof, (backend, got, dof)
+                assert close(got["spread_over_rounds"], ratio_of_spreads, T_TABLE_CLOSE), (backend, got, ratio_of_spreads)
                 assert abs(got["t"] - STUDENT_T_975[dof]) < 1e-5, (backend, got)
         for s in figures["series"]:  # a run of several processes: its exponents widened as derive_figure9 does
             name = f"{s['method']}{s.get('variant', '')} {s['backend']} larger_half"
