@@ -8,6 +8,9 @@ the time even when it is calibrated (so ~3 of 18 figures miss by chance); its co
 Repeat-run intervals that hold still miss about 1 figure in 20, so two runs agree on all 18 only about
 40% of the time: the last line says how often calibrated intervals would cover as few as these did.
 Results written before repeat intervals existed are held to their plain intervals.
+The runs' calibration probes are compared too: a probe more than 1.3x apart (figure9's own rule for an
+unusual machine state) means the machine was in another state, and the figures can differ by more than
+any interval drawn from one run (the CPU references' ratios follow the memory rate).
 
 usage: bench/figure9_agree.py A.json B.json   (exit 0 when every figure agrees, 1 otherwise)
 """
@@ -16,6 +19,9 @@ import math
 import sys
 
 REPEAT_COVERAGE = 0.95
+PROBES = {"cpu_copy_gb_per_s": "CPU copy", "cpu_fma_gflop_per_s": "CPU FMA", "gpu_copy_gb_per_s": "GPU copy",
+          "gpu_fma_gflop_per_s": "GPU FMA"}
+UNUSUAL_RATIO = 1.3  # measurement.machine_state.unusual_ratio
 
 
 def in_time(figure):
@@ -45,8 +51,26 @@ def at_most(k, n, p=REPEAT_COVERAGE):
     return sum(math.comb(n, i) * p ** i * (1 - p) ** (n - i) for i in range(k + 1))
 
 
+def machine_states(doc_a, doc_b):
+    """A line comparing the two runs' calibration probes (each probe's median rate over its run's rounds)."""
+    rates_a, rates_b = (d.get("measurement", {}).get("limits", {}) for d in (doc_a, doc_b))
+    shown, apart = [], []
+    for key, name in PROBES.items():
+        if key in rates_a and key in rates_b:
+            ratio = rates_a[key] / rates_b[key]
+            shown.append(f"{name} {rates_a[key]:.1f} vs {rates_b[key]:.1f} ({ratio:.2f}x)")
+            if max(ratio, 1 / ratio) > UNUSUAL_RATIO:
+                apart.append(name)
+    if not shown:
+        return "machine state: the runs carry no calibration probes"
+    verdict = (f"ANOTHER MACHINE STATE ({', '.join(apart)} more than {UNUSUAL_RATIO}x apart): figures can differ by "
+               "more than their intervals" if apart else f"every probe within {UNUSUAL_RATIO}x")
+    return f"machine state, A vs B: {'; '.join(shown)}; {verdict}"
+
+
 def main(a_path, b_path):
-    a, b = (headlines(json.load(open(p))) for p in (a_path, b_path))
+    doc_a, doc_b = (json.load(open(p)) for p in (a_path, b_path))
+    a, b = headlines(doc_a), headlines(doc_b)
     failures = plain_covered = repeat_covered = 0
     print(f"{'figure':<37} {'A [repeat run]':>22} {'B [repeat run]':>22} {'difference':>11}  covered  "
           f"95% covered  verdict")
@@ -74,6 +98,7 @@ def main(a_path, b_path):
         print(f"repeat-run intervals covered {repeat_covered} of {shared}; intervals that hold cover "
               f"{REPEAT_COVERAGE * shared:.1f} on average and {repeat_covered} or fewer for "
               f"{100 * at_most(repeat_covered, shared):.0f}% of pairs of runs (figures taken as independent)")
+    print(machine_states(doc_a, doc_b))
     return 1 if failures or missing else 0
 
 

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """bench/figure9_agree.py on a real figure9 result: a run agrees with itself; a copy whose first
 naive/FLAG ratio (with its interval) moved by 20%, or whose first exponent moved by 0.2, does not; nor do
-figures taken in another time (process CPU time against wall-clock).
+figures taken in another time (process CPU time against wall-clock). A copy whose CPU copy probe ran at
+half the rate is named as another machine state.
 
 usage: figure9_agree_test.py AGREE_SCRIPT FIGURE9_JSON SCRATCH_DIR
 """
@@ -24,6 +25,12 @@ def agree(other):
 
 same = agree(doc)
 assert same.returncode == 0, same.stdout + same.stderr
+assert "every probe within 1.3x" in same.stdout, same.stdout
+# The same figures from a machine whose memory ran at half the rate: told apart as another machine state.
+slower = copy.deepcopy(doc)
+slower["measurement"]["limits"]["cpu_copy_gb_per_s"] /= 2
+r = agree(slower)
+assert r.returncode == 0 and "ANOTHER MACHINE STATE (CPU copy more than 1.3x apart)" in r.stdout, r.stdout
 moved_ratio = copy.deepcopy(doc)
 ratio = moved_ratio["naive_over_flag"][0]
 for key in ("naive_over_flag", "low", "high", "repeat_low", "repeat_high"):
@@ -48,4 +55,5 @@ for s in other_time["series"]:
     s["time"] = "wall-clock time" if s["time"] == "process CPU time" else "process CPU time"
 r = agree(other_time)
 assert r.returncode == 1 and "in one run only" in r.stdout, r.stdout
-print("figure9_agree: self agrees; a 20% ratio shift, a 0.2 exponent shift and figures in another time are told apart")
+print("figure9_agree: self agrees; a 20% ratio shift, a 0.2 exponent shift, figures in another time and another "
+      "machine state are told apart")
