@@ -557,7 +557,7 @@ void print_summary(const nlohmann::json& doc) {
   }
   const std::string drift = probe_drift_text(h["probe_drift"]);
   // A process stops when its own rounds settle; the spread between processes can still widen the joined figures.
-  const bool widened = stop == "headlines settled" || stop == "every point settled";
+  const bool widened = runner::stopped_settled(stop);
   fmt::print("NOT SETTLED ({} after {} rounds): the machine was too noisy for these figures at the targets ({}):\n",
              widened ? "each process settled on its own rounds; the spread between processes widened the joined "
                        "intervals"

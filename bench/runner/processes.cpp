@@ -145,7 +145,7 @@ Joined run(const std::vector<std::string>& ids, const SweepSettings& s) {
   // The run's reason is one of the runner's: the first process's that did not settle, if any.
   rec.stop_reason = failure.empty() ? reasons.front() : "interrupted";
   for (const std::string& reason : reasons)
-    if (reason != "every point settled" && reason != "headlines settled") {
+    if (!runner::stopped_settled(reason)) {
       if (failure.empty()) rec.stop_reason = reason;
       break;
     }

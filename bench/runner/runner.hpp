@@ -89,6 +89,11 @@ struct RunRecord {
   double elapsed_s = 0;
 };
 
+// Whether a run's rounds ended because its figures settled (not on the budget, a cap or an interrupt).
+inline bool stopped_settled(const std::string& stop_reason) {
+  return stop_reason == "every point settled" || stop_reason == "headlines settled";
+}
+
 struct Progress {
   int round = 0;  // 0-based
   std::size_t visits_done = 0, points_active = 0, points_total = 0;
