@@ -172,14 +172,21 @@ void merge_files(const HistoryOptions& o) {
   const std::string schema = merged.value("schema", "");
   const auto deriver = derivers.find(schema);
   const std::string shard1 = merged["shards"][0]["shard"].get<std::string>();
+  bool round_map_dropped = false;  // merge_shards keeps round_process only when every shard has the same
+  for (const auto& s : merged["shards"])
+    round_map_dropped = round_map_dropped ||
+                        (s["measurement"].contains("round_process") && !merged["measurement"].contains("round_process"));
   if (deriver != derivers.end()) {
     deriver->second(merged);
     merged["derived_recomputed"] = true;
     merged["merged_note"] = fmt::format("{} shards joined by `bokehbench merge`; context and measurement are shard {}'s (each "
                                         "shard's are under shards); the command's derived figures were recomputed over "
-                                        "all merged points by the command's own code{}",
+                                        "all merged points by the command's own code{}{}",
                                         docs.size(), shard1,
-                                        schema == "bokehbench.figure9" ? " (probe drift and stop reason: shard " + shard1 + "'s)" : "");
+                                        schema == "bokehbench.figure9" ? " (probe drift and stop reason: shard " + shard1 + "'s)" : "",
+                                        round_map_dropped ? "; the shards split their rounds between processes differently, "
+                                                            "so no figure is widened by the spread between processes"
+                                                          : "");
   } else {
     merged["derived_recomputed"] = false;
     merged["merged_note"] = fmt::format("{} shards joined by `bokehbench merge`; context and measurement are shard {}'s (each "

@@ -90,6 +90,14 @@ nlohmann::json merge_shards(const std::vector<nlohmann::json>& docs, const std::
   }
   for (std::size_t i = 0; i < seen.size(); ++i)
     if (!seen[i]) throw std::runtime_error(fmt::format("merge: shard {}/{} is missing", i + 1, seen.size()));
+  // round_process maps a shard's round numbers to its processes (--processes). Shards whose rounds were
+  // split otherwise have no one map: the merged run keeps none rather than shard 1's, which would assign
+  // the other shards' samples to the wrong processes.
+  bool one_round_map = true;
+  for (const auto& s : shards)
+    one_round_map = one_round_map && s["measurement"].value("round_process", nlohmann::json()) ==
+                                         out["measurement"].value("round_process", nlohmann::json());
+  if (!one_round_map) out["measurement"].erase("round_process");
   out["points"] = points;
   out["skipped"] = skipped;
   out["status"] = complete ? "complete" : "partial";

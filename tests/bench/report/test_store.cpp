@@ -517,6 +517,22 @@ TEST(MergeShards, RefusesWhatIsNotOneWholeSweep) {
   EXPECT_NE(message({shard_doc(1, 2, {"a"}), shard_doc(2, 3, {"b"})}).find("one of 2"), std::string::npos);
 }
 
+// Shards measured by several processes each (--processes): one round-to-process map is kept only when
+// every shard has it; shard 1's map would put the other shards' rounds in the wrong processes.
+TEST(MergeShards, TheRoundToProcessMapIsKeptOnlyWhenTheShardsShareIt) {
+  auto with_map = [](int index, std::vector<std::string> ids, std::vector<int> map) {
+    auto doc = shard_doc(index, 2, ids);
+    doc["measurement"]["round_process"] = map;
+    return doc;
+  };
+  const auto same = merge_shards({with_map(1, {"a"}, {0, 0, 1, 1}), with_map(2, {"b"}, {0, 0, 1, 1})}, {"x", "y"});
+  EXPECT_EQ(same["measurement"]["round_process"], nlohmann::json({0, 0, 1, 1}));
+  const auto differ = merge_shards({with_map(1, {"a"}, {0, 0, 1, 1}), with_map(2, {"b"}, {0, 0, 0, 1, 1})}, {"x", "y"});
+  EXPECT_FALSE(differ["measurement"].contains("round_process"));
+  const auto one_has = merge_shards({with_map(1, {"a"}, {0, 1}), shard_doc(2, 2, {"b"})}, {"x", "y"});
+  EXPECT_FALSE(one_has["measurement"].contains("round_process"));
+}
+
 TEST(MergeShards, MachinesAreNamedWhenTheyDiffer) {
   const auto merged = merge_shards({shard_doc(1, 2, {"a"}, "EPYC"), shard_doc(2, 2, {"b"}, "Xeon")}, {"x", "y"});
   ASSERT_TRUE(merged["context"].contains("shard_machines"));
