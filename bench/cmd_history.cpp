@@ -172,10 +172,11 @@ void merge_files(const HistoryOptions& o) {
   const std::string schema = merged.value("schema", "");
   const auto deriver = derivers.find(schema);
   const std::string shard1 = merged["shards"][0]["shard"].get<std::string>();
-  bool round_map_dropped = false;  // merge_shards keeps round_process only when every shard has the same
-  for (const auto& s : merged["shards"])
-    round_map_dropped = round_map_dropped ||
-                        (s["measurement"].contains("round_process") && !merged["measurement"].contains("round_process"));
+  // merge_shards keeps round_process only when every shard has the same one.
+  const bool round_map_dropped =
+      !merged["measurement"].contains("round_process") &&
+      std::any_of(merged["shards"].begin(), merged["shards"].end(),
+                  [](const nlohmann::json& s) { return s["measurement"].contains("round_process"); });
   if (deriver != derivers.end()) {
     deriver->second(merged);
     merged["derived_recomputed"] = true;

@@ -1,9 +1,8 @@
 #!/usr/bin/python3
 """bench/figure9_agree.py on a real figure9 result: a run agrees with itself; a copy whose first
 naive/FLAG ratio (with its interval) moved by 20% (or out of its interval), or whose first exponent moved by
-0.2, does not; nor do
-figures taken in another time (process CPU time against wall-clock). A copy whose CPU copy probe ran at
-half the rate is named as another machine state.
+0.2, does not; nor do figures taken in another time (process CPU time against wall-clock). A copy whose CPU
+copy probe ran at half the rate is named as another machine state.
 
 usage: figure9_agree_test.py AGREE_SCRIPT FIGURE9_JSON SCRATCH_DIR
 """

@@ -1,5 +1,6 @@
 #include "merge.hpp"
 
+#include <algorithm>
 #include <set>
 #include <stdexcept>
 
@@ -93,11 +94,11 @@ nlohmann::json merge_shards(const std::vector<nlohmann::json>& docs, const std::
   // round_process maps a shard's round numbers to its processes (--processes). Shards whose rounds were
   // split otherwise have no one map: the merged run keeps none rather than shard 1's, which would assign
   // the other shards' samples to the wrong processes.
-  bool one_round_map = true;
-  for (const auto& s : shards)
-    one_round_map = one_round_map && s["measurement"].value("round_process", nlohmann::json()) ==
-                                         out["measurement"].value("round_process", nlohmann::json());
-  if (!one_round_map) out["measurement"].erase("round_process");
+  const nlohmann::json first_map = out["measurement"].value("round_process", nlohmann::json());
+  if (!std::all_of(shards.begin(), shards.end(), [&](const nlohmann::json& s) {
+        return s["measurement"].value("round_process", nlohmann::json()) == first_map;
+      }))
+    out["measurement"].erase("round_process");
   out["points"] = points;
   out["skipped"] = skipped;
   out["status"] = complete ? "complete" : "partial";
