@@ -92,7 +92,7 @@ void buffers(BuffersOptions& o) {
                          "the ceil(W/s) x ceil(H/s) x ceil(ceil(N/2)/s) 3D image; memory.bytes adds the bracket and "
                          "low-res buffers: what --max-buffer-mb is checked against"},
               {"error_reference", "error.vs_flag_f32: CPU FLAG with f32 layers at full resolution, same scene, lens, N "
-                                  "and k (flag_blur_streamed, bit for bit flag_blur)"},
+                                  "and k (flag_blur: no layer buffer at any size)"},
               {"band_rows", o.band_rows},
               {"streamed", "layer_buffer = streamed points: full resolution, each precision, one per band_rows (0: "
                            "auto); memory.details.streamed has the band and ring rows"}};
@@ -102,9 +102,7 @@ void buffers(BuffersOptions& o) {
     return SweepSettings::ExtraReference{
         "flag_f32", fmt::format("{}/{}x{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px), [&scene, lens, p, threads] {
           const CocInput coc = cpu_coc_pass(scene.color, scene.depth_m, lens, p.options.pattern);
-          // Bands of 64 rows: a ring of (64 + 2 n k) rows of f32 layers, not the frame's.
-          return flag_blur_streamed(coc.packed, p.options.pattern, LayerPrecision::f32, 64,
-                                    threads > 0 ? threads : default_cpu_threads());
+          return flag_blur(coc.packed, p.options.pattern, LayerPrecision::f32, threads > 0 ? threads : default_cpu_threads());
         }};
   };
   s.visit_together = [](const SweepPoint& p) {

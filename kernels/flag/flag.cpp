@@ -237,12 +237,11 @@ Image flag_blur_reference(const Image& packed, const GatherPattern& p, LayerPrec
 
 namespace {
 
-// Columns per strip of flag_blur: a strip's layers, ceil(N/2) x 3 x height x strip floats, stay
-// within ~16 MiB (a few MiB at 800x600, N = 41), in multiples of the vector width.
-int strip_columns(int layers, int height) {
-  const double floats = 4.0 * 1024 * 1024 / (static_cast<double>(layers) * 3 * std::max(1, height));
-  return std::clamp(static_cast<int>(floats) / simd::kWidth * simd::kWidth, simd::kWidth, 64);
-}
+// Columns per strip of flag_blur, whole vectors: a strip's scratch (one source row's layers and the
+// output rows in flight, ceil(N/2) + 2 n k + 1 rows of 3 x 32 floats: 0.2 MB at N = 153, k = 2) stays
+// within a core's L2 at every N, so the frame time does not depend on how much L3 the machine lends.
+constexpr int kStripColumns = 32;
+static_assert(kStripColumns % simd::kWidth == 0);
 
 // reach_of[d] = min(isqrt(d), n): a column's reach is reach_of[index - i^2] (reach_layer).
 std::vector<std::int16_t> reach_table(int n, int max_index) {
@@ -306,16 +305,17 @@ inline void flag_vertical_row(Image& out, int y, int x0, int x1, int n, int k, R
 
 }  // namespace
 
-// flag_horizontal + flag_vertical, strip by strip. The horizontal pass writes a column's layers
-// from that row's input alone, and the vertical pass reads only that column's layers, so a strip of
-// columns is computed whole (no halo) while its layers fit in a buffer reused from frame to frame.
-// Per pixel the same float operations in the same order as the reference (flag_row_layers,
-// flag_vertical_row), vectorised across adjacent columns in the vertical pass.
+// flag_horizontal + flag_vertical, strip by strip and fused: the horizontal pass writes a column's
+// layers from that row's input alone and the vertical pass reads only that column's layers, so a strip
+// of columns is computed whole (no halo). Each source row's layers are made once (flag_row_layers) and
+// added at once to the two output rows that read them (layer z of row sy: output rows sy -+ z k), which
+// receive them in ascending sy, the order flag_vertical sums them in; so per pixel the same float
+// operations in the same order as the reference, and no layer ever leaves the strip's scratch.
 Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision precision, int threads) {
   if (is_bracketed(precision)) return flag_blur_reference(packed, p, precision, threads);  // brackets span rows
   check_layer_input(packed, precision);
   const int w = packed.width, h = packed.height, n = p.half(), k = p.spacing_px, layers = p.layers();
-  const int max_index = 2 * n * n;
+  const int max_index = 2 * n * n, reach_rows = n * k;
   const std::vector<std::int16_t> reach_of = reach_table(n, max_index);
   Scratch<std::int32_t> index_scratch(packed.pixel_count());
   std::int32_t* const disc = index_scratch.data();
@@ -326,29 +326,64 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
     }
   });
 
-  const int strip = strip_columns(layers, h), strips = (w + strip - 1) / strip;
-  const auto strip_floats = static_cast<std::size_t>(layers) * 3 * h * strip;
+  constexpr int strip = kStripColumns;
+  const int strips = (w + strip - 1) / strip;
+  // Output rows in flight: those sy - n k .. sy + n k, each in slot y mod ring_rows.
+  const int ring_rows = std::min(h, 2 * reach_rows + 1);
   Image out(w, h, 3);
-  // Strip s goes to worker s % threads; each worker leases one strip buffer for all its strips.
-  const int workers = std::clamp(threads, 1, std::max(1, strips));
+  // Strip s goes to worker s % workers.
+  const int workers = std::clamp(threads, 1, strips);
   parallel_rows(workers, workers, [&](int worker) {
-    Scratch<float> scratch(strip_floats);
-    float* const buffer = scratch.data();
-    // buffer[((y * layers + z) * 3 + c) * strip + x - x0]: a pixel's values within one row's block
-    // (a few pages), the strip's columns contiguous for the vertical pass's vectors.
-    auto at = [&](int z, int c, int y) {
-      return buffer + ((static_cast<std::size_t>(y) * layers + z) * 3 + c) * strip;
-    };
+    // layer_row[(z * 3 + c) * strip + x - x0]: the current source row's layers.
+    std::vector<float> layer_row(static_cast<std::size_t>(layers) * 3 * strip);
+    // sums[(slot * 3 + c) * strip + x - x0]: the vertical pass's running sums of the rows in flight.
+    std::vector<float> sums(static_cast<std::size_t>(ring_rows) * 3 * strip);
     std::vector<float> bins(static_cast<std::size_t>(layers) * 3);
+    auto sum_row = [&](int y, int c) { return sums.data() + (static_cast<std::size_t>(y % ring_rows) * 3 + c) * strip; };
+    auto add_layer = [&](int z, int y, int width) {
+      for (int c = 0; c < 3; ++c) {
+        const float* src = layer_row.data() + (static_cast<std::size_t>(z) * 3 + c) * strip;
+        float* dst = sum_row(y, c);
+        for (int x = 0; x < width; x += simd::kWidth) simd::store(dst + x, simd::load(dst + x) + simd::load(src + x));
+      }
+    };
+    auto emit = [&](int y, int x0, int x1) {
+      for (int x = x0; x < x1; ++x) {
+        float* o = out.px(x, y);
+        for (int c = 0; c < 3; ++c) o[c] = sum_row(y, c)[x - x0];
+      }
+    };
     for (int s = worker; s < strips; s += workers) {
       const int x0 = s * strip, x1 = std::min(w, x0 + strip);
-      for (int y = 0; y < h; ++y)
-        flag_row_layers(packed, disc + static_cast<std::size_t>(y) * w, reach_of.data(), y, x0, x1, n, k, precision,
-                        bins.data(), [&](int z, int c) { return at(z, c, y); });
-      for (int y = 0; y < h; ++y) flag_vertical_row(out, y, x0, x1, n, k, at);  // rows `strip` wide: whole vectors
+      const int width = (x1 - x0 + simd::kWidth - 1) / simd::kWidth * simd::kWidth;  // lanes past x1 are dropped
+      std::fill(sums.begin(), sums.end(), 0.0f);
+      for (int sy = 0; sy < h; ++sy) {
+        // Output row sy + n k gets its first layer now (the rows below it have been zeroed above).
+        if (sy > 0 && sy + reach_rows < h)
+          for (int c = 0; c < 3; ++c) std::fill_n(sum_row(sy + reach_rows, c), strip, 0.0f);
+        flag_row_layers(packed, disc + static_cast<std::size_t>(sy) * w, reach_of.data(), sy, x0, x1, n, k, precision,
+                        bins.data(), [&](int z, int c) { return layer_row.data() + (static_cast<std::size_t>(z) * 3 + c) * strip; });
+        for (int z = 0; z <= n; ++z) {
+          if (sy - z * k >= 0) add_layer(z, sy - z * k, width);
+          if (z > 0 && sy + z * k < h) add_layer(z, sy + z * k, width);
+        }
+        // Output row y is whole once sy reaches min(y + n k, h - 1).
+        if (sy < h - 1) {
+          if (sy - reach_rows >= 0) emit(sy - reach_rows, x0, x1);
+        } else {
+          for (int y = std::max(0, sy - reach_rows); y < h; ++y) emit(y, x0, x1);
+        }
+      }
     }
   });
   return out;
+}
+
+std::uint64_t flag_blur_cpu_bytes(int width_px, int height_px, const GatherPattern& p, int threads) {
+  const auto layer_row = static_cast<std::uint64_t>(p.layers()) * 3 * kStripColumns;
+  const auto sums = static_cast<std::uint64_t>(std::min(height_px, 2 * p.half() * p.spacing_px + 1)) * 3 * kStripColumns;
+  const auto per_thread = (layer_row + sums + p.layers() * 3ull) * sizeof(float);
+  return static_cast<std::uint64_t>(width_px) * height_px * sizeof(std::int32_t) + std::max(threads, 1) * per_thread;
 }
 
 namespace {

@@ -89,11 +89,15 @@ FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& patter
 // both_halves (shapes that are not mirror-symmetric, kernels/flag/flag_shape.hpp), layer n - j.
 Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads(),
                     bool both_halves = false);
-// The whole FLAG blur. For the per-value precisions (f32, f16, r11g11b10f) it runs strip by strip in a
-// buffer reused across calls, vectorised, bit for bit flag_blur_reference's result (tested); the
-// bracketed precisions take flag_blur_reference (their brackets span whole rows).
+// The whole FLAG blur. For the per-value precisions (f32, f16, r11g11b10f) it runs strip by strip with
+// both passes fused, so no layer leaves a strip's scratch (a few hundred KiB a thread), vectorised, bit
+// for bit flag_blur_reference's result (tested); the bracketed precisions take flag_blur_reference
+// (their brackets span whole rows).
 Image flag_blur(const Image& packed, const GatherPattern& pattern, LayerPrecision precision = LayerPrecision::f32,
                 int threads = default_cpu_threads());
+// Bytes flag_blur allocates beyond its input and output for the per-value precisions: the disc
+// indices (4 B a pixel) and each thread's strip scratch.
+std::uint64_t flag_blur_cpu_bytes(int width_px, int height_px, const GatherPattern& pattern, int threads);
 // flag_vertical(flag_horizontal(...)): the straightforward passes through the whole 3D buffer.
 Image flag_blur_reference(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                           int threads = default_cpu_threads());
@@ -102,9 +106,8 @@ Image flag_blur_reference(const Image& packed, const GatherPattern& pattern, Lay
 // (kernels/flag/flag_gpu.hpp): bands of `band_rows` output rows; for each, the horizontal pass fills
 // the ring (B + 2 n k rows, at most the height) up to the band's last row + n k, then the vertical
 // pass sums the band. Bit for bit flag_blur's result for the per-value precisions (the same per-pixel
-// operations); throws std::invalid_argument for bracketed ones and for band_rows < 1. The one way
-// the CPU bounds FLAG's memory: the method's CPU reference streams past 256 MiB of layers and for
-// layer_buffer = streamed, and `bokehbench buffers` computes its 4K f32 reference so.
+// operations); throws std::invalid_argument for bracketed ones and for band_rows < 1. The method's
+// CPU reference for layer_buffer = streamed.
 Image flag_blur_streamed(const Image& packed, const GatherPattern& pattern, LayerPrecision precision, int band_rows,
                          int threads = default_cpu_threads());
 // Bytes flag_blur_streamed allocates beyond its input and output: the ring (f32, rows padded to whole

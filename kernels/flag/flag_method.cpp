@@ -100,21 +100,14 @@ MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
   return use;
 }
 
-// The CPU reference holds its 3D buffer whole up to this size; beyond it, it streams its layers
-// through a ring of rows (flag_blur_streamed: the same result bit for bit) of about this size, so a
-// 8192^2 frame needs ~0.25 GiB instead of 16 GiB. layer_buffer = streamed streams the same way, with
-// the GPU's band (lavapipe's auto when band_rows is 0). Bracketed precisions bracket whole rows and
-// reduced buffers run at low resolution: both stay whole.
-constexpr std::uint64_t kCpuWholeBufferBytes = 256ull << 20;
-
-// Output rows per band of the CPU reference, 0 for the whole frame at once.
-int cpu_band_rows(const FlagConfig& c, int w, int h) {
-  if (c.buffer_scale != 1 || is_bracketed(c.precision)) return 0;
+// Output rows per band of the CPU reference for layer_buffer = streamed (the GPU's band; lavapipe's
+// auto when band_rows is 0), 0 otherwise: flag_blur needs no layer buffer at any size, and bracketed
+// precisions (brackets span rows) and reduced buffers (flag_blur at low resolution) never stream.
+int cpu_band_rows(const FlagConfig& c, int w) {
+  if (!c.streamed || c.buffer_scale != 1 || is_bracketed(c.precision)) return 0;
   const int reach_rows = c.pattern.half() * c.pattern.spacing_px;
   const std::uint64_t row_bytes = static_cast<std::uint64_t>(w) * c.pattern.layers() * 12;  // f32 rgb
-  if (c.streamed) return flag_stream_band_rows(c.band_rows, true, reach_rows, row_bytes);
-  if (static_cast<std::uint64_t>(h) * row_bytes <= kCpuWholeBufferBytes) return 0;
-  return std::max<int>(8, static_cast<int>(kCpuWholeBufferBytes / row_bytes) - 2 * reach_rows);
+  return flag_stream_band_rows(c.band_rows, true, reach_rows, row_bytes);
 }
 
 // adaptive = on, as the GPU computes it: FLAG on its grid (full or reduced) with the layers the
@@ -131,7 +124,7 @@ Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
   FlagConfig sized_config = c;
   sized_config.pattern = sized;
   Image blurred;
-  if (const int band = s == 1 ? cpu_band_rows(sized_config, packed.width, packed.height) : 0; band > 0)
+  if (const int band = s == 1 ? cpu_band_rows(sized_config, packed.width) : 0; band > 0)
     blurred = flag_blur_streamed(packed, sized, c.precision, band, in.threads);
   else
     blurred = flag_blur(packed, sized, c.precision, in.threads);
@@ -264,7 +257,7 @@ void declare_flag(std::vector<Method>& methods) {
     if (c.adaptive) return flag_adaptive_cpu(in, c);
     if (c.buffer_scale != 1)
       return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);
-    if (const int band = cpu_band_rows(c, in.packed.width, in.packed.height); band > 0)
+    if (const int band = cpu_band_rows(c, in.packed.width); band > 0)
       return flag_blur_streamed(in.packed, c.pattern, c.precision, band, in.threads);
     return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
@@ -293,12 +286,16 @@ void declare_flag(std::vector<Method>& methods) {
     if (!o.aperture.is_disc()) {  // the packed input (4 floats a pixel) and the whole 3D buffer in f32
       return static_cast<std::uint64_t>(w) * h * (16 + flag_aperture_layers(o.aperture, c.pattern) * std::uint64_t{12});
     }
-    if (const int band = cpu_band_rows(c, w, h); band > 0)
+    if (const int band = cpu_band_rows(c, w); band > 0)
       return flag_streamed_cpu_bytes(w, h, c.pattern, band, default_cpu_threads());
+    // flag_blur on the grid (reduced: the low-resolution input, 4 floats a pixel, and blur, 3, besides),
+    // or for bracketed precisions flag_blur_reference's whole 3D buffer in f32.
     const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
     const auto lw = static_cast<std::uint64_t>(ceil_div(w, c.buffer_scale));
     const auto lh = static_cast<std::uint64_t>(ceil_div(h, c.buffer_scale));
-    return lw * lh * low.layers() * 3 * sizeof(float);  // FlagLayers: the whole 3D buffer in f32
+    const std::uint64_t low_images = c.buffer_scale == 1 ? 0 : lw * lh * 7 * sizeof(float);
+    if (is_bracketed(c.precision)) return low_images + lw * lh * low.layers() * 3 * sizeof(float);
+    return low_images + flag_blur_cpu_bytes(static_cast<int>(lw), static_cast<int>(lh), low, default_cpu_threads());
   };
   // Against the CPU emulation of the same format. Each output sums 2n+1 non-negative layer values,
   // none larger than the image's largest output (layer 0 of the pixel's own row is part of it):

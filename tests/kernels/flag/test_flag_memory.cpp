@@ -15,14 +15,18 @@ namespace {
 
 const GatherPattern k41{41, 2};
 
-// The CPU FLAG reference runs in strips once its whole 3D buffer would pass 256 MiB: at 8192^2 it
-// holds well under 1 GiB instead of 8192 x 8192 x 21 layers x 12 B = 16 GiB.
-TEST(FlagMemory, CpuReferenceIsBoundedByStrips) {
+// The CPU FLAG reference fuses its passes strip by strip: besides a disc index a pixel (4 B) it holds,
+// per thread, one source row's layers and the output rows in flight (2 n k + 1, at most the height),
+// 32 columns of rgb f32 each, and the bins: 8 MiB at 8192^2 where the whole 3D buffer is 16 GiB.
+TEST(FlagMemory, CpuReferenceHoldsNoLayerBuffer) {
   const Method& flag = find_method("flag");
-  FilterOptions o = flag.defaults(k41);
-  EXPECT_EQ(flag.cpu_memory_bytes(o, 800, 600), 800ull * 600 * 21 * 12);  // whole: 115 MiB
-  EXPECT_LT(flag.cpu_memory_bytes(o, 8192, 8192), 1ull << 30);
-  o.precision = "unorm16_bracketed";  // brackets whole rows: stays whole, and says so
+  FilterOptions o = flag.defaults(k41);  // n = 20, k = 2: 21 layers, 81 rows in flight
+  const int threads = default_cpu_threads();
+  const std::uint64_t per_thread = (21 * 3 * 32 + 81 * 3 * 32 + 21 * 3) * 4;
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 800, 600), 800ull * 600 * 4 + threads * per_thread);
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 4 + threads * per_thread);
+  EXPECT_EQ(flag.cpu_memory_bytes(o, 64, 40), 64ull * 40 * 4 + threads * (21 * 3 * 32 + 40 * 3 * 32 + 21 * 3) * 4ull);
+  o.precision = "unorm16_bracketed";  // brackets whole rows: the whole buffer, and says so
   EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 21 * 12);
 }
 
