@@ -237,11 +237,29 @@ Image flag_blur_reference(const Image& packed, const GatherPattern& p, LayerPrec
 
 namespace {
 
-// Columns per strip of flag_blur, whole vectors: a strip's scratch (one source row's layers and the
-// output rows in flight, ceil(N/2) + 2 n k + 1 rows of 3 x 32 floats: 0.2 MB at N = 153, k = 2) stays
-// within a core's L2 at every N, so the frame time does not depend on how much L3 the machine lends.
-constexpr int kStripColumns = 32;
-static_assert(kStripColumns % simd::kWidth == 0);
+// flag_blur's strips. A thread's scratch (one source row's layers and the output rows in flight,
+// ceil(N/2) + min(H, 2 n k + 1) rows of rgb f32 per column) stays within about 256 KiB, so it stays in a
+// core's L2 at every N and the frame time does not depend on how much L3 the machine lends; strips are
+// at most 64 columns (wider: less per-row overhead at small N). Their number is a multiple of the
+// workers' and their widths nearly equal (whole vectors), so that each worker (strip s: worker s %
+// workers) gets the same number of columns.
+struct Strips {
+  int count = 1, workers = 1, max_columns = 0, width = 0;
+  int start(int s) const { return s >= count ? width : static_cast<int>(static_cast<std::int64_t>(s) * width / count) / simd::kWidth * simd::kWidth; }
+};
+Strips plan_strips(const GatherPattern& p, int width_px, int height_px, int threads) {
+  const auto rows = static_cast<std::size_t>(p.layers() + std::min(height_px, 2 * p.half() * p.spacing_px + 1));
+  const int fit = std::clamp(static_cast<int>((256u << 10) / (rows * 3 * sizeof(float))) / simd::kWidth * simd::kWidth,
+                             simd::kWidth, 64);
+  const int vectors = (width_px + simd::kWidth - 1) / simd::kWidth;
+  Strips st;
+  st.width = width_px;
+  st.workers = std::clamp(threads, 1, vectors);
+  st.count = std::min(vectors, ((width_px + fit - 1) / fit + st.workers - 1) / st.workers * st.workers);
+  for (int s = 0; s < st.count; ++s) st.max_columns = std::max(st.max_columns, st.start(s + 1) - st.start(s));
+  st.max_columns = (st.max_columns + simd::kWidth - 1) / simd::kWidth * simd::kWidth;
+  return st;
+}
 
 // reach_of[d] = min(isqrt(d), n): a column's reach is reach_of[index - i^2] (reach_layer).
 std::vector<std::int16_t> reach_table(int n, int max_index) {
@@ -326,14 +344,12 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
     }
   });
 
-  constexpr int strip = kStripColumns;
-  const int strips = (w + strip - 1) / strip;
+  const Strips strips = plan_strips(p, w, h, threads);
+  const int strip = strips.max_columns;  // the scratch's row stride
   // Output rows in flight: those sy - n k .. sy + n k, each in slot y mod ring_rows.
   const int ring_rows = std::min(h, 2 * reach_rows + 1);
   Image out(w, h, 3);
-  // Strip s goes to worker s % workers.
-  const int workers = std::clamp(threads, 1, strips);
-  parallel_rows(workers, workers, [&](int worker) {
+  parallel_rows(strips.workers, strips.workers, [&](int worker) {
     // layer_row[(z * 3 + c) * strip + x - x0]: the current source row's layers.
     std::vector<float> layer_row(static_cast<std::size_t>(layers) * 3 * strip);
     // sums[(slot * 3 + c) * strip + x - x0]: the vertical pass's running sums of the rows in flight.
@@ -353,8 +369,8 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
         for (int c = 0; c < 3; ++c) o[c] = sum_row(y, c)[x - x0];
       }
     };
-    for (int s = worker; s < strips; s += workers) {
-      const int x0 = s * strip, x1 = std::min(w, x0 + strip);
+    for (int s = worker; s < strips.count; s += strips.workers) {
+      const int x0 = strips.start(s), x1 = strips.start(s + 1);
       const int width = (x1 - x0 + simd::kWidth - 1) / simd::kWidth * simd::kWidth;  // lanes past x1 are dropped
       std::fill(sums.begin(), sums.end(), 0.0f);
       for (int sy = 0; sy < h; ++sy) {
@@ -380,10 +396,12 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
 }
 
 std::uint64_t flag_blur_cpu_bytes(int width_px, int height_px, const GatherPattern& p, int threads) {
-  const auto layer_row = static_cast<std::uint64_t>(p.layers()) * 3 * kStripColumns;
-  const auto sums = static_cast<std::uint64_t>(std::min(height_px, 2 * p.half() * p.spacing_px + 1)) * 3 * kStripColumns;
+  const Strips strips = plan_strips(p, width_px, height_px, threads);
+  const int strip = strips.max_columns;
+  const auto layer_row = static_cast<std::uint64_t>(p.layers()) * 3 * strip;
+  const auto sums = static_cast<std::uint64_t>(std::min(height_px, 2 * p.half() * p.spacing_px + 1)) * 3 * strip;
   const auto per_thread = (layer_row + sums + p.layers() * 3ull) * sizeof(float);
-  return static_cast<std::uint64_t>(width_px) * height_px * sizeof(std::int32_t) + std::max(threads, 1) * per_thread;
+  return static_cast<std::uint64_t>(width_px) * height_px * sizeof(std::int32_t) + strips.workers * per_thread;
 }
 
 namespace {

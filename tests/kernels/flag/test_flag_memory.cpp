@@ -16,16 +16,24 @@ namespace {
 const GatherPattern k41{41, 2};
 
 // The CPU FLAG reference fuses its passes strip by strip: besides a disc index a pixel (4 B) it holds,
-// per thread, one source row's layers and the output rows in flight (2 n k + 1, at most the height),
-// 32 columns of rgb f32 each, and the bins: 8 MiB at 8192^2 where the whole 3D buffer is 16 GiB.
+// per thread, one source row's layers and the output rows in flight (2 n k + 1, at most the height) of a
+// strip, sized to stay within about 256 KiB (a core's L2): the same at 8192^2, where the whole 3D buffer
+// would be 16 GiB, as at 800x600.
 TEST(FlagMemory, CpuReferenceHoldsNoLayerBuffer) {
   const Method& flag = find_method("flag");
-  FilterOptions o = flag.defaults(k41);  // n = 20, k = 2: 21 layers, 81 rows in flight
-  const int threads = default_cpu_threads();
-  const std::uint64_t per_thread = (21 * 3 * 32 + 81 * 3 * 32 + 21 * 3) * 4;
-  EXPECT_EQ(flag.cpu_memory_bytes(o, 800, 600), 800ull * 600 * 4 + threads * per_thread);
-  EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 4 + threads * per_thread);
-  EXPECT_EQ(flag.cpu_memory_bytes(o, 64, 40), 64ull * 40 * 4 + threads * (21 * 3 * 32 + 40 * 3 * 32 + 21 * 3) * 4ull);
+  const std::uint64_t threads = default_cpu_threads();
+  for (const GatherPattern& pattern : {GatherPattern{9, 2}, k41, GatherPattern{153, 2}, GatherPattern{41, 1}}) {
+    const FilterOptions o = flag.defaults(pattern);
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{64, 40}, {800, 600}, {8192, 8192}}) {
+      const std::uint64_t index = static_cast<std::uint64_t>(w) * h * 4, bytes = flag.cpu_memory_bytes(o, w, h);
+      ASSERT_GT(bytes, index) << pattern.size_n << " " << w << "x" << h;
+      EXPECT_LE(bytes - index, threads * (288u << 10)) << pattern.size_n << " " << w << "x" << h;  // 256 KiB + rounding
+      // At least one thread's scratch for a strip of 4 columns (the narrowest vector).
+      const int rows = pattern.layers() + std::min(h, 2 * pattern.half() * pattern.spacing_px + 1);
+      EXPECT_GE(bytes - index, rows * 12ull * 4) << pattern.size_n << " " << w << "x" << h;
+    }
+  }
+  FilterOptions o = flag.defaults(k41);
   o.precision = "unorm16_bracketed";  // brackets whole rows: the whole buffer, and says so
   EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 21 * 12);
 }
