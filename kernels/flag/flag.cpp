@@ -237,6 +237,15 @@ Image flag_blur_reference(const Image& packed, const GatherPattern& p, LayerPrec
 
 namespace {
 
+// Columns rounded up to whole vectors: rows the vertical pass loads a vector at a time, past the last column.
+int whole_vectors(int columns) { return (columns + simd::kWidth - 1) / simd::kWidth * simd::kWidth; }
+
+// Rows of layers or sums in flight while `band_rows` output rows are summed: the band and the reach
+// on either side (flag_blur: bands of one row), at most the frame.
+int ring_rows_of(int height_px, const GatherPattern& p, int band_rows) {
+  return static_cast<int>(std::min<std::int64_t>(height_px, static_cast<std::int64_t>(band_rows) + 2 * p.half() * p.spacing_px));
+}
+
 // flag_blur's strips. A thread's scratch (one source row's layers and the output rows in flight,
 // ceil(N/2) + min(H, 2 n k + 1) rows of rgb f32 per column) stays within about 256 KiB, so it stays in a
 // core's L2 at every N and the frame time does not depend on how much L3 the machine lends; strips are
@@ -248,16 +257,16 @@ struct Strips {
   int start(int s) const { return s >= count ? width : static_cast<int>(static_cast<std::int64_t>(s) * width / count) / simd::kWidth * simd::kWidth; }
 };
 Strips plan_strips(const GatherPattern& p, int width_px, int height_px, int threads) {
-  const auto rows = static_cast<std::size_t>(p.layers() + std::min(height_px, 2 * p.half() * p.spacing_px + 1));
+  const auto rows = static_cast<std::size_t>(p.layers() + ring_rows_of(height_px, p, 1));
   const int fit = std::clamp(static_cast<int>((256u << 10) / (rows * 3 * sizeof(float))) / simd::kWidth * simd::kWidth,
                              simd::kWidth, 64);
-  const int vectors = (width_px + simd::kWidth - 1) / simd::kWidth;
+  const int vectors = whole_vectors(width_px) / simd::kWidth;
   Strips st;
   st.width = width_px;
   st.workers = std::clamp(threads, 1, vectors);
   st.count = std::min(vectors, ((width_px + fit - 1) / fit + st.workers - 1) / st.workers * st.workers);
   for (int s = 0; s < st.count; ++s) st.max_columns = std::max(st.max_columns, st.start(s + 1) - st.start(s));
-  st.max_columns = (st.max_columns + simd::kWidth - 1) / simd::kWidth * simd::kWidth;
+  st.max_columns = whole_vectors(st.max_columns);
   return st;
 }
 
@@ -347,7 +356,7 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
   const Strips strips = plan_strips(p, w, h, threads);
   const int strip = strips.max_columns;  // the scratch's row stride
   // Output rows in flight: those sy - n k .. sy + n k, each in slot y mod ring_rows.
-  const int ring_rows = std::min(h, 2 * reach_rows + 1);
+  const int ring_rows = ring_rows_of(h, p, 1);
   Image out(w, h, 3);
   parallel_rows(strips.workers, strips.workers, [&](int worker) {
     // layer_row[(z * 3 + c) * strip + x - x0]: the current source row's layers.
@@ -371,7 +380,7 @@ Image flag_blur(const Image& packed, const GatherPattern& p, LayerPrecision prec
     };
     for (int s = worker; s < strips.count; s += strips.workers) {
       const int x0 = strips.start(s), x1 = strips.start(s + 1);
-      const int width = (x1 - x0 + simd::kWidth - 1) / simd::kWidth * simd::kWidth;  // lanes past x1 are dropped
+      const int width = whole_vectors(x1 - x0);  // lanes past x1 are dropped
       std::fill(sums.begin(), sums.end(), 0.0f);
       for (int sy = 0; sy < h; ++sy) {
         // Output row sy + n k gets its first layer now (the rows below it have been zeroed above).
@@ -399,26 +408,15 @@ std::uint64_t flag_blur_cpu_bytes(int width_px, int height_px, const GatherPatte
   const Strips strips = plan_strips(p, width_px, height_px, threads);
   const int strip = strips.max_columns;
   const auto layer_row = static_cast<std::uint64_t>(p.layers()) * 3 * strip;
-  const auto sums = static_cast<std::uint64_t>(std::min(height_px, 2 * p.half() * p.spacing_px + 1)) * 3 * strip;
+  const auto sums = static_cast<std::uint64_t>(ring_rows_of(height_px, p, 1)) * 3 * strip;
   const auto per_thread = (layer_row + sums + p.layers() * 3ull) * sizeof(float);
   return static_cast<std::uint64_t>(width_px) * height_px * sizeof(std::int32_t) + strips.workers * per_thread;
 }
 
-namespace {
-
-// Columns of a ring row: whole vectors, for the vertical pass's loads past the frame's last column.
-int ring_stride(int width_px) { return (width_px + simd::kWidth - 1) / simd::kWidth * simd::kWidth; }
-
-int ring_rows_of(int height_px, const GatherPattern& p, int band_rows) {
-  return static_cast<int>(std::min<std::int64_t>(height_px, static_cast<std::int64_t>(band_rows) + 2 * p.half() * p.spacing_px));
-}
-
-}  // namespace
-
 std::uint64_t flag_streamed_cpu_bytes(int width_px, int height_px, const GatherPattern& p, int band_rows,
                                       int threads) {
   const auto ring = static_cast<std::uint64_t>(ring_rows_of(height_px, p, std::max(band_rows, 1))) * p.layers() * 3 *
-                    ring_stride(width_px) * sizeof(float);
+                    whole_vectors(width_px) * sizeof(float);
   // Per worker: the bins (ceil(N/2) x 3 floats) and a row of disc indices.
   const auto scratch = static_cast<std::uint64_t>(std::max(threads, 1)) * (p.layers() * 12ull + width_px * 4ull);
   return ring + scratch;
@@ -438,7 +436,7 @@ Image flag_blur_streamed(const Image& packed, const GatherPattern& p, LayerPreci
   check_layer_input(packed, precision);
   const int w = packed.width, h = packed.height, n = p.half(), k = p.spacing_px, layers = p.layers();
   const int max_index = 2 * n * n, reach_rows = n * k;
-  const int ring_rows = ring_rows_of(h, p, band_rows), stride = ring_stride(w);
+  const int ring_rows = ring_rows_of(h, p, band_rows), stride = whole_vectors(w);
   const std::vector<std::int16_t> reach_of = reach_table(n, max_index);
   Scratch<float> ring_scratch(static_cast<std::size_t>(ring_rows) * layers * 3 * stride);
   float* const ring = ring_scratch.data();
