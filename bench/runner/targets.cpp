@@ -126,7 +126,8 @@ SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::str
     try {
       check_options(m, p.options);
       std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
-      for (auto& pass : m.work(p.options, w, h)) work.push_back(std::move(pass));
+      const auto& model = p.backend == "cpu" && m.cpu_work ? m.cpu_work : m.work;
+      for (auto& pass : model(p.options, w, h)) work.push_back(std::move(pass));
       plans_[i].work = work_json(work, static_cast<double>(w) * h);
       // Device features and limits, memory budget, host memory: known before anything is allocated.
       FramePlan plan;

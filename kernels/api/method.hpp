@@ -105,6 +105,9 @@ struct Method {
   std::function<Image(const CpuInput&)> cpu_reference;
   std::function<std::unique_ptr<gpu::GpuFilter>(gpu::GpuFrame&, const FilterOptions&)> make_gpu;
   std::function<std::vector<PassWork>(const FilterOptions&, int width_px, int height_px)> work;
+  // The CPU reference's work where it moves other bytes than the GPU passes (null: `work`'s): the
+  // throughput a CPU point reports is this over its frame time.
+  std::function<std::vector<PassWork>(const FilterOptions&, int width_px, int height_px)> cpu_work;
   // Intermediate memory on the device (ctx: ask the driver where the method can; may be null).
   std::function<MemoryUse(const FilterOptions&, int width_px, int height_px, vk::Context* ctx)> gpu_memory;
   // Intermediate memory the CPU reference allocates.

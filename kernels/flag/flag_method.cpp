@@ -277,6 +277,17 @@ void declare_flag(std::vector<Method>& methods) {
                                {"vertical", pixels * c.pattern.size_n, layer_bytes, pixels * 16}});
     return work;
   };
+  // flag_blur (the disc at full resolution, per-value precisions) keeps each layer in its strip's
+  // scratch, within a core's L2 (flag_blur_cpu_bytes): both passes' taps, the packed input read and the
+  // image (3 floats a pixel) written once. Every other CPU path moves its layers as the GPU passes do.
+  m.cpu_work = [gpu_work = m.work](const FilterOptions& o, int w, int h) {
+    const FlagConfig c = flag_config(o);
+    if (!o.aperture.is_disc() || c.adaptive || c.buffer_scale != 1 || is_bracketed(c.precision) ||
+        cpu_band_rows(c, w) > 0)
+      return gpu_work(o, w, h);
+    const double pixels = static_cast<double>(w) * h;
+    return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12}};
+  };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
     if (!o.aperture.is_disc()) return flag_shape_gpu_memory(flag_config(o), o.aperture, w, h, ctx);
     return flag_gpu_memory(flag_config(o), w, h, ctx);

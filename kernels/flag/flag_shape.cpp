@@ -65,7 +65,9 @@ FlagShapeTable::FlagShapeTable(const Aperture& aperture, const GatherPattern& pa
                                            "(not convex there), which chord extents cannot draw",
                                            aperture.name(), side, side, column - n));
       const std::int32_t packed = (hi[c] + n + 1) << 16 | (lo[c] + n);
-      for (std::size_t m = group_start + 1; m <= group_end; ++m) chords[c * areas + m] = packed;
+      const auto column_chords = chords.begin() + static_cast<std::ptrdiff_t>(c * areas);  // areas group_start + 1 .. group_end
+      std::fill(column_chords + static_cast<std::ptrdiff_t>(group_start + 1),
+                column_chords + static_cast<std::ptrdiff_t>(group_end + 1), packed);
     }
     group_start = group_end;
   }

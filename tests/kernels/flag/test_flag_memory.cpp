@@ -38,6 +38,29 @@ TEST(FlagMemory, CpuReferenceHoldsNoLayerBuffer) {
   EXPECT_EQ(flag.cpu_memory_bytes(o, 8192, 8192), 8192ull * 8192 * 21 * 12);
 }
 
+// The CPU reference's work model, which a CPU point's throughput divides by its time: the fused
+// reference reads the packed input (4 floats a pixel) and writes the image (3) once, with both passes'
+// taps (N row samples and N layer sums a pixel); the paths that keep layers in memory move them as the
+// GPU passes do.
+TEST(FlagMemory, CpuWorkCountsNoLayerTraffic) {
+  const Method& flag = find_method("flag");
+  const auto total = [](const std::vector<PassWork>& passes) {
+    PassWork sum;
+    for (const PassWork& p : passes) sum.taps += p.taps, sum.bytes_read += p.bytes_read, sum.bytes_written += p.bytes_written;
+    return sum;
+  };
+  FilterOptions o = flag.defaults(GatherPattern{81, 2});
+  const double pixels = 800.0 * 600;
+  const PassWork cpu = total(flag.cpu_work(o, 800, 600)), gpu = total(flag.work(o, 800, 600));
+  EXPECT_EQ(cpu.taps, 2 * 81 * pixels);
+  EXPECT_EQ(cpu.taps, gpu.taps);
+  EXPECT_EQ(cpu.bytes_read, 16 * pixels);
+  EXPECT_EQ(cpu.bytes_written, 12 * pixels);
+  EXPECT_EQ(gpu.bytes_written - 16 * pixels, 41 * 8 * pixels);  // the GPU's f16 layers, which the CPU never writes
+  o.precision = "unorm16_bracketed";  // flag_blur_reference's whole buffer: the GPU's model
+  EXPECT_EQ(total(flag.cpu_work(o, 800, 600)).bytes_written, total(flag.work(o, 800, 600)).bytes_written);
+}
+
 // Streamed layers: the ring of B + 2 n k rows as the model sizes it and as the driver allocates it.
 // The goal at 1080p / 41x41 (k = 1) f16: <= 16 MiB on lavapipe's auto band (12 rows: 52 rows of
 // 1920 x 21 texels), against 332 MiB for the full buffer; explicit bands set the ring's rows.
