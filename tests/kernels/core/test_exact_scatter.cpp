@@ -87,7 +87,9 @@ TEST(ExactScatter, UniformImageFullyDefocusedStaysUniformInTheInterior) {
     for (int y = margin; y < kH - margin; ++y)
       for (int x = margin; x < kW - margin; ++x)
         ASSERT_NEAR(out[(static_cast<std::size_t>(y) * kW + x) * 3], 2.0, 1e-9) << to_string(mode) << " " << x << "," << y;
-    if (mode == ScatterComposite::energy_sum) EXPECT_LT(out[0], 2.0 * 0.5);  // a corner keeps about a quarter
+    if (mode == ScatterComposite::energy_sum) {
+      EXPECT_LT(out[0], 2.0 * 0.5);  // a corner keeps about a quarter
+    }
   }
 }
 
