@@ -3,8 +3,8 @@
 // one run.
 //
 // Why: two runs of the same build on one machine differ by more than either run's rounds show. A
-// process is one draw of what stays fixed while it lives (on the EPYC VM: each point's GPU vertical
-// pass, by up to 35%, and the machine's phase over its minutes; not heap or code addresses, the same
+// process is one draw of what stays fixed while it lives (on the EPYC VM: each point's allocations,
+// its GPU vertical pass by up to 35%, and the machine's phase over its minutes; not heap or code addresses, the same
 // with address randomisation off, nor page size, the same with huge pages): an `ab` of two identical
 // builds put one point 5% apart between processes, far outside each process's own interval, and
 // freeing and re-preparing every target inside one process did not redraw it. Rounds cannot show what they all share. Runs
