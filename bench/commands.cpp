@@ -299,6 +299,12 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
                                      "one process's rounds cannot show (README, \"Do two runs agree?\")")
                          ->check(CLI::Range(1, 16))
                          ->capture_default_str();
+  cmd->add_option("--replicas", replicas,
+                  "Prepare each point this many times (each with allocations of its own), its visits taking them in "
+                  "turn: on machines where memory placement is a draw, a point's samples then span that many draws "
+                  "(README, \"Do two runs agree?\"); costs that many times the intermediates' memory")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
   // Internal: how a run of several processes starts each of them (processes.hpp).
   cmd->add_option("--process", process, "Internal (--processes): this is process k of P")->group("");
   // Internal: how `bokehbench ab` starts the two builds it compares (answers on stdin, not for people).
@@ -321,6 +327,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.policy.sample_min_ms = sample_ms;
   s.policy.lead_in_ms = lead_in_ms;
   s.policy.seed = seed;
+  s.policy.replicas = replicas;
   s.policy.extra_work_fraction = inject_slowdown_pct / 100.0;
   s.serve = serve;
   const auto [index, count] = parse_shard(shard);

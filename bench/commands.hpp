@@ -93,6 +93,7 @@ struct SweepFlags {
   std::string store;             // --store URL; empty: <out_dir>/history.sqlite
   bool no_store = false;         // --no-store: append nothing
   int processes = 1;             // --processes P (processes.hpp)
+  int replicas = 1;              // --replicas R (runner::Policy::replicas)
   std::string process;           // --process k/P: this is process k of such a run (internal)
   CLI::Option* processes_option = nullptr;
   // The shard as axes take it (call after parsing; throws std::invalid_argument naming --shard).

@@ -216,15 +216,21 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     record.points.push_back(std::move(r));
   }
   std::mt19937_64 rng(policy.seed);
+  if (policy.replicas < 1) throw std::invalid_argument("replicas must be at least 1");
+  const auto replicas = static_cast<std::size_t>(policy.replicas);
+  // Live targets by point * replicas + replica.
   std::map<std::size_t, std::unique_ptr<Target>> live;
   std::list<std::size_t> recency;  // least recently visited first
   std::vector<double> last_visit_s(names.size(), 0.0);
   std::map<std::string, int> probe_frames;
   std::size_t visits = 0;
 
+  auto drop_key = [&](std::size_t key) {
+    live.erase(key);
+    recency.remove(key);
+  };
   auto drop = [&](std::size_t i) {
-    live.erase(i);
-    recency.remove(i);
+    for (std::size_t r = 0; r < replicas; ++r) drop_key(i * replicas + r);
   };
   auto make_room = [&](std::size_t keep) {
     auto resident = [&] {
@@ -235,7 +241,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     while (resident() > policy.resident_limit_bytes && live.size() > 1) {
       const auto victim = std::find_if(recency.begin(), recency.end(), [&](std::size_t i) { return i != keep; });
       if (victim == recency.end()) break;
-      drop(*victim);
+      drop_key(*victim);
     }
   };
   auto skip_point = [&](std::size_t i, const std::string& why) {
@@ -263,21 +269,25 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
       PointRecord& rec = record.points[i];
       const auto visit_start = std::chrono::steady_clock::now();
       try {
-        auto it = live.find(i);
+        const std::size_t key = i * replicas + rec.samples.size() % replicas;
+        auto it = live.find(key);
         if (it == live.end()) {
           auto target = hooks.prepare(i);
           ++rec.preparations;
-          it = live.emplace(i, std::move(target)).first;
+          it = live.emplace(key, std::move(target)).first;
           if (rec.frames_per_sample == 0) {
             rec.frames_per_sample = point_frames(warm_up(*it->second, policy, rec), policy);
             if (hooks.first_ready) hooks.first_ready(i, *it->second);
           } else {
-            it->second->warm_up();  // freed earlier to save memory: compile caches are warm already
+            // Another replica, or freed earlier to save memory: compile caches are warm already; one
+            // untimed frame takes the first touch of its fresh memory out of the samples.
+            it->second->warm_up();
+            it->second->measure(1);
           }
-          make_room(i);
+          make_room(key);
         }
-        recency.remove(i);
-        recency.push_back(i);
+        recency.remove(key);
+        recency.push_back(key);
         lead_in(*it->second, rec.samples.empty() ? rec.warm_up_ms.back() : rec.samples.back().frame_ms, policy);
         const int frames = rec.frames_per_sample, extra = extra_frames(frames, policy);
         Sample sample = timed(*it->second, frames + extra, frames);

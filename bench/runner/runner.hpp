@@ -58,6 +58,10 @@ struct Policy {
   // own work. It must be p/100 with a whole p; frames per sample become multiples of 100/gcd(p, 100).
   double extra_work_fraction = 0;
   std::uint64_t resident_limit_bytes = 4ull << 30;  // live targets beyond this are freed, least recent first
+  // Independent preparations of each point, its visits taking them in turn: each has allocations of its
+  // own, whose placement is a draw on some machines (FLAG's GPU vertical pass up to 35% apart between two
+  // identical targets on the EPYC VM, README), so a point's samples span that many draws.
+  int replicas = 1;
   std::uint64_t seed = 1;                            // of the shuffled visiting order
 };
 

@@ -481,6 +481,7 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
       {"extra_work_fraction", policy.extra_work_fraction},
       {"rounds", rec.round_order.size()},
       {"processes", s.processes},
+      {"replicas", s.policy.replicas},
       {"stop_reason", rec.stop_reason},
       {"round_order", order},
       {"timing", "gpu: Vulkan timestamps around each pass of one submission of frames_per_sample frames (per-frame "

@@ -58,6 +58,8 @@ struct Harness {
   std::vector<std::size_t> visit_group;                      // runner::Hooks::visit_group
   std::vector<std::size_t> visit_block;                      // runner::Hooks::visit_block
   std::function<std::vector<bool>(const RunRecord&)> points_needed;  // runner::Hooks::points_needed
+  double ms_per_preparation = 0;  // each later target of a point takes this much longer than the one before
+  std::map<std::size_t, int> preparations;
 
   RunRecord run(const std::vector<double>& times, const Policy& policy, const std::vector<std::string>& skip = {},
                 std::function<void(const RunRecord&)> checkpoint = {}) {
@@ -66,8 +68,8 @@ struct Harness {
     runner::Hooks hooks;
     hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
       if (i < fail_on_prepare.size() && !fail_on_prepare[i].empty()) throw std::runtime_error(fail_on_prepare[i]);
-      auto t = std::make_unique<FakeTarget>(i, times[i], i < jitter.size() ? jitter[i] : std::vector<double>{}, log,
-                                            bytes);
+      const double ms = times[i] + ms_per_preparation * preparations[i]++;
+      auto t = std::make_unique<FakeTarget>(i, ms, i < jitter.size() ? jitter[i] : std::vector<double>{}, log, bytes);
       // Frames per sample follow from the pilot: ceil(sample_min_ms / ms).
       t->frames_hint_ = std::clamp(static_cast<int>(std::ceil(policy.sample_min_ms / times[i])), 1,
                                    policy.max_frames_per_sample);
@@ -89,6 +91,27 @@ Policy fast_policy() {
   p.sample_min_ms = 10;
   p.warm_up_max_s = 0;
   return p;
+}
+
+// Replicas: each point prepared that many times, its samples taking the targets in turn (sample s from
+// replica s mod R), each replica's first frame untimed.
+TEST(Runner, ReplicasTakeTurnsEachWithTargetsOfTheirOwn) {
+  Harness h;
+  h.ms_per_preparation = 0.5;  // replica r's frames take 0.5 r ms more: which replica took a sample shows
+  Policy p = fast_policy();
+  p.min_samples = p.max_samples = 6;
+  p.replicas = 2;
+  const RunRecord r = h.run({2, 3}, p);
+  ASSERT_EQ(r.status, "complete");
+  for (std::size_t i = 0; i < 2; ++i) {
+    const runner::PointRecord& rec = r.points[i];
+    EXPECT_EQ(rec.preparations, 2);
+    ASSERT_EQ(rec.samples.size(), 6u);
+    for (std::size_t s = 0; s < rec.samples.size(); ++s)
+      EXPECT_DOUBLE_EQ(rec.samples[s].frame_ms, (i == 0 ? 2.0 : 3.0) + 0.5 * static_cast<double>(s % 2)) << i << " " << s;
+  }
+  p.replicas = 0;
+  EXPECT_THROW(h.run({2}, p), std::invalid_argument);
 }
 
 TEST(Runner, EveryPointGetsItsFirstSampleBeforeAnyGetsItsSecond) {
@@ -181,7 +204,9 @@ TEST(Runner, AnInterruptionKeepsEverySampleTakenSoFar) {
 TEST(Runner, TargetsOverTheResidentLimitAreFreedAndPreparedAgain) {
   Harness h;
   h.bytes = 100;
-  h.jitter = {{0.0, 0.3}, {0.0, 0.3}, {0.0, 0.3}};
+  // Never settles: a visit that prepares again also runs one untimed frame, so each visit takes two
+  // jitter values; a period of 3 keeps the samples apart.
+  h.jitter = {{0.0, 0.3, 0.6}, {0.0, 0.3, 0.6}, {0.0, 0.3, 0.6}};
   Policy p = fast_policy();
   p.resident_limit_bytes = 150;  // one target at a time
   const RunRecord r = h.run({1, 1, 1}, p);
