@@ -253,6 +253,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
   for (int round = 0; !active.empty() && !interrupted(); ++round) {
     const std::vector<std::size_t> order = round_order(active, hooks.visit_group, hooks.visit_block, round, rng);
     record.round_order.push_back(order);
+    const auto probes_start = std::chrono::steady_clock::now();
     for (auto& [name, probe] : hooks.probes) {
       if (round == 0) {
         PointRecord warm;
@@ -264,6 +265,7 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
       record.probe_ms[name].push_back(s.frame_ms);
       record.probe_cpu_ms[name].push_back(s.cpu_ms);
     }
+    const double probes_s = seconds_since(probes_start);
     for (std::size_t i : order) {
       if (interrupted()) break;
       PointRecord& rec = record.points[i];
@@ -354,9 +356,14 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
         break;
       }
     }
+    auto next_round_s = [&] {  // as the points still active took in their last visits
+      double s = probes_s;
+      for (std::size_t i : active) s += last_visit_s[i];
+      return s;
+    };
     if (active.empty()) {
       record.stop_reason = by_headlines ? "max_samples reached" : "every point settled";
-    } else if (everyone_has_min && seconds_since(start) >= policy.budget_s) {
+    } else if (everyone_has_min && budget_spent(seconds_since(start), next_round_s(), policy.budget_s)) {
       record.stop_reason = "budget spent";
       break;
     }

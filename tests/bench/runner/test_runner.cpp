@@ -237,6 +237,16 @@ TEST(Runner, TheBudgetOrSettlingIsTheRecordedStopReason) {
   EXPECT_EQ(spent.run({1}, p).stop_reason, "budget spent");
 }
 
+// The rounds end where the run comes nearest its budget: another round runs while it would end
+// closer to the budget (past it or not) than the run is now.
+TEST(Runner, TheBudgetEndsTheRoundsNearestToIt) {
+  EXPECT_FALSE(runner::budget_spent(85, 20, 100));  // 15 s short now; the next round ends 5 s past
+  EXPECT_TRUE(runner::budget_spent(95, 20, 100));   // 5 s short now; the next round ends 15 s past
+  EXPECT_TRUE(runner::budget_spent(90, 20, 100));   // as near either way: stop
+  EXPECT_TRUE(runner::budget_spent(101, 0, 100));   // past it already
+  EXPECT_FALSE(runner::budget_spent(99.9, 0, 100));
+}
+
 // A group's points are visited back to back in every round and take turns going first, so a ratio
 // of theirs is measured side by side; the groups' order is still shuffled.
 TEST(Runner, PointsOfAGroupAreVisitedBackToBackTakingTurnsFirst) {
