@@ -417,8 +417,10 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
                           "(the interval widened by sqrt(2)); a repeat run's estimate falls in the plain 95% interval "
                           "only about 83% of the time. Where this machine's earlier runs of the same points (the "
                           "results store; measurement.run_to_run: the spread about each commit's mean, pooled, from "
-                          "min_degrees_of_freedom on) spread wider than this run's interval, each side is sqrt(2) * "
-                          "run_to_run_t * run_to_run_sd instead (t: Student's 97.5% quantile for its degrees of freedom; "
+                          "min_degrees_of_freedom on, the figure's own or its family's pooled over a backend's figures of one "
+                          "kind, whichever reaches wider: run_to_run_from) spread wider than this run's interval, each "
+                          "side is sqrt(2) * run_to_run_t * run_to_run_sd instead (t: Student's 97.5% quantile for its "
+                          "degrees of freedom; "
                           "history::widen_repeat_intervals): a run's own rounds cannot show the offset between runs"},
       {"targets", {{"ratio_relative_half_width", target_ratio}, {"exponent_half_width", target_exponent}}},
       {"settled", lead.unsettled.empty()},
@@ -451,24 +453,31 @@ void print_repeat_basis(const nlohmann::json& measurement) {
     return;
   }
   const nlohmann::json& spread = measurement["run_to_run"];
+  const int needed = spread.value("min_degrees_of_freedom", history::kRunToRunMinDegreesOfFreedom);
   nlohmann::json most = {{"degrees_of_freedom", 0}};  // the figures share their runs; the best-measured one
   for (const auto& figure : spread.value("figures", nlohmann::json::object()))
     if (figure["degrees_of_freedom"] > most["degrees_of_freedom"]) most = figure;
+  std::vector<std::string> families;
+  const nlohmann::json by_family = spread.value("families", nlohmann::json::object());
+  for (const auto& [family, f] : by_family.items())
+    if (f["degrees_of_freedom"].get<int>() >= needed)
+      families.push_back(fmt::format("{} {:.2g}{} ({} degrees of freedom)", family, f["sd"].get<double>(),
+                                     family.rfind("naive_over_flag", 0) == 0 ? " in logs" : "",
+                                     f["degrees_of_freedom"].get<int>()));
   const int degrees_of_freedom = most["degrees_of_freedom"];
-  const int needed = spread.value("min_degrees_of_freedom", history::kRunToRunMinDegreesOfFreedom);
-  if (degrees_of_freedom >= needed) {
-    fmt::print("a repeat run: where this machine's earlier runs of this configuration ({} runs of {} commit{} in the "
-               "results store; degrees of freedom of their spread about each commit's mean: {}) spread their "
-               "estimates wider than this run's interval, the repeat-run interval is sqrt(2) * t of their standard "
-               "deviation (t = {:.2f}, Student's 97.5%: fewer runs, wider)\n",
-               most["runs"].get<int>(), most["commits"].get<int>(), most["commits"] == 1 ? "" : "s",
-               degrees_of_freedom, student_t_975(degrees_of_freedom));
+  if (degrees_of_freedom >= needed || !families.empty()) {
+    fmt::print("a repeat run: where this machine's earlier runs of this configuration ({} in the results store) spread "
+               "their estimates wider than this run's interval, the repeat-run interval is sqrt(2) * t of their "
+               "standard deviation about each commit's mean (t: Student's 97.5% for its degrees of freedom: fewer, "
+               "wider), each figure's own ({} degrees of freedom at most) or its family's pooled, whichever is "
+               "wider: {}\n",
+               spread.value("earlier_runs", 0), degrees_of_freedom, families.empty() ? "none" : fmt::format("{}", fmt::join(families, "; ")));
     return;
   }
   fmt::print("a repeat run: from this run's rounds alone (earlier runs of this configuration in the results store: {}; "
-             "degrees of freedom of their spread about each commit's mean: {} of the {} needed, as from 3 runs of one "
-             "commit or 2 each of two, to measure how far runs differ). Runs on a shared machine can differ by more "
-             "than their rounds show: expect some repeat-run estimates outside these intervals\n",
+             "degrees of freedom of their spread about each commit's mean: {} of the {} needed, as from 2 runs of one "
+             "commit pooled over a family of figures, to measure how far runs differ). Runs on a shared machine can "
+             "differ by more than their rounds show: expect some repeat-run estimates outside these intervals\n",
              spread.value("earlier_runs", 0), degrees_of_freedom, needed);
 }
 

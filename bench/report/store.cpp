@@ -625,6 +625,11 @@ nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const 
         relative[h.name] = h.unit == "ratio";
         values[h.name][run.commit].push_back(relative[h.name] ? std::log(h.value) : h.value);
       }
+  struct Pooled {
+    double squares = 0;
+    int degrees_of_freedom = 0, figures = 0;
+  };
+  std::map<std::string, Pooled> families;
   nlohmann::json figures = nlohmann::json::object();
   for (const auto& [name, by_commit] : values) {
     double squares = 0;
@@ -643,29 +648,77 @@ nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const 
                      {"runs", runs},
                      {"commits", commits},
                      {"degrees_of_freedom", degrees_of_freedom}};
+    if (const std::string family = headline_family(name); !family.empty()) {
+      Pooled& f = families[family];
+      f.squares += squares;
+      f.degrees_of_freedom += degrees_of_freedom;
+      ++f.figures;
+      figures[name]["family"] = family;
+    }
   }
+  nlohmann::json family_spread = nlohmann::json::object();
+  for (const auto& [family, f] : families)
+    family_spread[family] = {{"sd", std::sqrt(f.squares / f.degrees_of_freedom)},
+                             {"figures", f.figures},
+                             {"degrees_of_freedom", f.degrees_of_freedom}};
   return {{"earlier_runs", earlier.size()},
           {"min_degrees_of_freedom", kRunToRunMinDegreesOfFreedom},
           {"recent_runs_compared", recent_runs},
           {"same", "machine, sweep and point ids; the spread about each commit's own mean, pooled over commits"},
-          {"figures", figures}};
+          {"figures", figures},
+          {"families", family_spread}};
+}
+
+std::string headline_family(const std::string& name) {
+  std::vector<std::string> parts;
+  for (std::size_t from = 0;;) {
+    const std::size_t slash = name.find('/', from);
+    parts.push_back(name.substr(from, slash - from));
+    if (slash == std::string::npos) break;
+    from = slash + 1;
+  }
+  auto join = [&](std::size_t skip) {
+    std::string out;
+    for (std::size_t i = 0; i < parts.size(); ++i)
+      if (i != skip) out += (out.empty() ? "" : "/") + parts[i];
+    return out;
+  };
+  if (parts.size() >= 3 && parts[0] == "naive_over_flag" && parts[2].rfind("N:", 0) == 0) return join(2);
+  if (parts.size() >= 4 && parts[0] == "exponent") return join(1);
+  return "";
 }
 
 void widen_repeat_intervals(nlohmann::json& doc) {
   if (!doc.contains("measurement") || !doc["measurement"].contains("run_to_run")) return;
-  const nlohmann::json& figures = doc["measurement"]["run_to_run"].value("figures", nlohmann::json::object());
+  const nlohmann::json& spread = doc["measurement"]["run_to_run"];
+  const nlohmann::json& figures = spread.value("figures", nlohmann::json::object());
   for (const HeadlineRow& h : headlines_of(doc)) {
     if (h.at.empty() || !h.low || !figures.contains(h.name)) continue;
     nlohmann::json& f = doc[nlohmann::json::json_pointer(h.at)];
     const auto& s = figures[h.name];
-    const int degrees_of_freedom = s.value("degrees_of_freedom", 0);
-    if (!f.contains("repeat_low") || degrees_of_freedom < kRunToRunMinDegreesOfFreedom) continue;
-    const double sd = s["sd"].get<double>() * (s["relative"].get<bool>() ? h.value : 1);
-    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, sd, degrees_of_freedom);
+    if (!f.contains("repeat_low")) continue;
+    // The figure's own spread, or its family's pooled one (run_to_run_spread), whichever reaches wider.
+    struct Spread {
+      double sd = 0;
+      int degrees_of_freedom = 0;
+      const char* from = "";
+      double reach() const { return degrees_of_freedom >= kRunToRunMinDegreesOfFreedom ? student_t_975(degrees_of_freedom) * sd : 0; }
+    };
+    const double scale = s["relative"].get<bool>() ? h.value : 1;
+    Spread use{s["sd"].get<double>() * scale, s.value("degrees_of_freedom", 0), "figure"};
+    if (const nlohmann::json& by_family = spread.value("families", nlohmann::json::object());
+        s.contains("family") && by_family.contains(s["family"])) {
+      const nlohmann::json& family = by_family[s["family"].get<std::string>()];
+      const Spread pooled{family["sd"].get<double>() * scale, family["degrees_of_freedom"].get<int>(), "family"};
+      if (pooled.reach() > use.reach()) use = pooled;
+    }
+    if (use.reach() == 0) continue;
+    const Interval repeat = repeat_run({h.value, *h.low, *h.high}, use.sd, use.degrees_of_freedom);
     f["repeat_low"] = repeat.low;
     f["repeat_high"] = repeat.high;
-    f["run_to_run_sd"] = sd;
-    f["run_to_run_t"] = student_t_975(degrees_of_freedom);
+    f["run_to_run_sd"] = use.sd;
+    f["run_to_run_t"] = student_t_975(use.degrees_of_freedom);
+    f["run_to_run_from"] = use.from;
   }
 }
 

@@ -141,15 +141,28 @@ nlohmann::json machine_state(Store& store, const nlohmann::json& doc, int recent
 // their logs, a relative spread), taken about each commit's own mean and pooled over the commits with
 // two runs or more, so that a new commit starts from the machine's spread rather than from nothing.
 // {"earlier_runs", "min_degrees_of_freedom", "figures": {name: {"sd", "relative", "runs", "commits",
-// "degrees_of_freedom"}}}. A run's own rounds cannot show this spread (see repeat_run); from
-// kRunToRunMinDegreesOfFreedom on (3 runs of one commit, or 2 each of two), widen_repeat_intervals uses it.
+// "degrees_of_freedom", "family"}}, "families": {family: {"sd", "figures", "degrees_of_freedom"}}}: a
+// family (headline_family) pools its figures' squares and degrees of freedom, so that two earlier runs
+// of one commit already measure a spread (figure9's 7 GPU ratios: 7 degrees of freedom, where each
+// ratio alone has 1). A run's own rounds cannot show this spread (see repeat_run); from
+// kRunToRunMinDegreesOfFreedom on (a figure: 3 runs of one commit, or 2 each of two; a family: 2 runs),
+// widen_repeat_intervals uses it.
 constexpr int kRunToRunMinDegreesOfFreedom = 2;
 nlohmann::json run_to_run_spread(Store& store, const nlohmann::json& doc, const std::string& sweep, int recent_runs = 10);
 
+// The family a headline figure's run-to-run spread is pooled in: figures of one kind and backend in one
+// time, whose offsets between runs come from the same machine state ("naive_over_flag/gpu/N:9/cpu_time"
+// -> "naive_over_flag/gpu/cpu_time", "exponent/naive/gpu/larger_half" -> "exponent/gpu/larger_half");
+// "" for figures pooled with no other.
+std::string headline_family(const std::string& name);
+
 // Every headline figure of `doc` with a repeat-run interval (figure9's repeat_low/repeat_high) gets
-// it from repeat_run(its interval, the spread of measurement.run_to_run, its degrees of freedom) and
-// what it used (run_to_run_sd, in its units; run_to_run_t), where that spread has
-// kRunToRunMinDegreesOfFreedom.
+// it from repeat_run(its interval, a spread of measurement.run_to_run, that spread's degrees of freedom)
+// and what it used (run_to_run_sd, in its units; run_to_run_t; run_to_run_from: "figure" or "family"),
+// where the figure's own spread or its family's has kRunToRunMinDegreesOfFreedom; with both, the one
+// whose t * sd is wider. Held to the four pairs of default figure9 runs of 2026-12-04 (each pair's
+// repeat intervals widened by one other pair as their history), pairs agreed on 194 of 216 figures with
+// families, 183 with each figure's own spread (too few runs: never used) and 183 with none.
 void widen_repeat_intervals(nlohmann::json& doc);
 
 // A command's run appended to the store at `url` once its results file is written (the file is the

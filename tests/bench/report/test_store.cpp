@@ -221,6 +221,53 @@ TEST_P(StoreTest, RepeatRunIntervalsTakeTheSpreadOfThisMachinesEarlierRuns) {
   EXPECT_NEAR(two_commits["naive_over_flag"][0]["run_to_run_t"].get<double>(), student_t_975(2), 1e-12);
 }
 
+// A family (headline_family: one kind of figure on one backend, in one time) pools its figures' spread:
+// two earlier runs of one commit give each of three ratios 1 degree of freedom, too few alone, and their
+// family 3, which widen_repeat_intervals then uses (the sample standard deviation pooled by hand).
+TEST_P(StoreTest, TwoEarlierRunsMeasureAFamilysSpreadWhereEachFigureHasTooFew) {
+  EXPECT_EQ(headline_family("naive_over_flag/gpu/N:9/cpu_time"), "naive_over_flag/gpu/cpu_time");
+  EXPECT_EQ(headline_family("naive_over_flag/cpu/N:153"), "naive_over_flag/cpu");
+  EXPECT_EQ(headline_family("exponent/naive/gpu/larger_half/cpu_time"), "exponent/gpu/larger_half/cpu_time");
+  EXPECT_EQ(headline_family("speedup/adaptive/x"), "");
+  auto run_doc = [](int day, const std::vector<double>& ratios) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (std::size_t i = 0; i < ratios.size(); ++i)
+      rows.push_back({{"N", 9 + 24 * static_cast<int>(i)}, {"backend", "gpu"}, {"naive_over_flag", ratios[i]},
+                      {"low", ratios[i] * 0.99}, {"high", ratios[i] * 1.01}, {"repeat_low", 0}, {"repeat_high", 0}});
+    return nlohmann::json{{"schema", "bokehbench.figure9"},
+                          {"status", "complete"},
+                          {"context", {{"cpu_model", "EPYC"}, {"cpu_cores", 2},
+                                       {"date_utc", fmt::format("2026-02-{:02}T00:00:00Z", day)}, {"git_commit", "c"}}},
+                          {"points", {{{"id", "p"}, {"method", "naive"}, {"backend", "gpu"}, {"samples_ms", {1.0}}}}},
+                          {"naive_over_flag", rows}};
+  };
+  auto store = Store::open(url_, true);
+  const std::vector<double> first = {1.0, 2.0, 3.0}, second = {1.1, 2.0, 2.7};
+  store->append_document(run_doc(1, first), "x", "run");
+  store->append_document(run_doc(2, second), "x", "run");
+  nlohmann::json doc = run_doc(3, {1.0, 2.0, 3.0});
+  doc["measurement"]["run_to_run"] = run_to_run_spread(*store, doc, "figure9");
+  double squares = 0;  // about each pair's mean, in logs: (a - b)^2 / 2 a pair
+  for (std::size_t i = 0; i < first.size(); ++i) squares += std::pow(std::log(first[i]) - std::log(second[i]), 2) / 2;
+  const auto& family = doc["measurement"]["run_to_run"]["families"]["naive_over_flag/gpu"];
+  EXPECT_EQ(family["figures"], 3);
+  EXPECT_EQ(family["degrees_of_freedom"], 3);
+  EXPECT_NEAR(family["sd"].get<double>(), std::sqrt(squares / 3), 1e-12);
+  EXPECT_EQ(doc["measurement"]["run_to_run"]["figures"]["naive_over_flag/gpu/N:9"]["degrees_of_freedom"], 1);
+
+  widen_repeat_intervals(doc);
+  const double t = student_t_975(3);
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    const auto& r = doc["naive_over_flag"][i];
+    const double sd = first[i] * std::sqrt(squares / 3);  // relative, at this run's estimate
+    EXPECT_EQ(r["run_to_run_from"], "family");
+    EXPECT_NEAR(r["run_to_run_sd"].get<double>(), sd, 1e-12);
+    EXPECT_NEAR(r["run_to_run_t"].get<double>(), t, 1e-12);
+    EXPECT_NEAR(r["repeat_low"].get<double>(), first[i] - std::sqrt(2.0) * t * sd, 1e-12);
+    EXPECT_NEAR(r["repeat_high"].get<double>(), first[i] + std::sqrt(2.0) * t * sd, 1e-12);
+  }
+}
+
 TEST_P(StoreTest, WhatIsAppendedReadsBackExactly) {
   auto store = Store::open(url_, true);
   const auto id = store->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));
