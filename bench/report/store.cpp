@@ -706,8 +706,8 @@ void widen_repeat_intervals(nlohmann::json& doc) {
     };
     const double scale = s["relative"].get<bool>() ? h.value : 1;
     Spread use{s["sd"].get<double>() * scale, s.value("degrees_of_freedom", 0), "figure"};
-    if (const nlohmann::json& by_family = spread.value("families", nlohmann::json::object());
-        s.contains("family") && by_family.contains(s["family"])) {
+    if (const nlohmann::json by_family = spread.value("families", nlohmann::json::object());
+        s.contains("family") && by_family.contains(s["family"].get<std::string>())) {
       const nlohmann::json& family = by_family[s["family"].get<std::string>()];
       const Spread pooled{family["sd"].get<double>() * scale, family["degrees_of_freedom"].get<int>(), "family"};
       if (pooled.reach() > use.reach()) use = pooled;
