@@ -691,33 +691,39 @@ std::string headline_family(const std::string& name) {
 void widen_repeat_intervals(nlohmann::json& doc) {
   if (!doc.contains("measurement") || !doc["measurement"].contains("run_to_run")) return;
   const nlohmann::json& spread = doc["measurement"]["run_to_run"];
-  const nlohmann::json& figures = spread.value("figures", nlohmann::json::object());
+  const nlohmann::json figures = spread.value("figures", nlohmann::json::object());
+  const nlohmann::json families = spread.value("families", nlohmann::json::object());
+  // A spread of run_to_run (a figure's own or its family's) in the figure's units, with Student's t for
+  // its degrees of freedom where it has enough to be used (else 0: it reaches nowhere).
+  struct Spread {
+    double sd = 0, t = 0;
+    int degrees_of_freedom = 0;
+    const char* from = "";
+    double reach() const { return t * sd; }
+  };
+  auto spread_of = [](const nlohmann::json& s, double scale, const char* from) {
+    Spread out{s["sd"].get<double>() * scale, 0, s.value("degrees_of_freedom", 0), from};
+    if (out.degrees_of_freedom >= kRunToRunMinDegreesOfFreedom) out.t = student_t_975(out.degrees_of_freedom);
+    return out;
+  };
   for (const HeadlineRow& h : headlines_of(doc)) {
     if (h.at.empty() || !h.low || !figures.contains(h.name)) continue;
     nlohmann::json& f = doc[nlohmann::json::json_pointer(h.at)];
     const auto& s = figures[h.name];
     if (!f.contains("repeat_low")) continue;
     // The figure's own spread, or its family's pooled one (run_to_run_spread), whichever reaches wider.
-    struct Spread {
-      double sd = 0;
-      int degrees_of_freedom = 0;
-      const char* from = "";
-      double reach() const { return degrees_of_freedom >= kRunToRunMinDegreesOfFreedom ? student_t_975(degrees_of_freedom) * sd : 0; }
-    };
     const double scale = s["relative"].get<bool>() ? h.value : 1;
-    Spread use{s["sd"].get<double>() * scale, s.value("degrees_of_freedom", 0), "figure"};
-    if (const nlohmann::json by_family = spread.value("families", nlohmann::json::object());
-        s.contains("family") && by_family.contains(s["family"].get<std::string>())) {
-      const nlohmann::json& family = by_family[s["family"].get<std::string>()];
-      const Spread pooled{family["sd"].get<double>() * scale, family["degrees_of_freedom"].get<int>(), "family"};
-      if (pooled.reach() > use.reach()) use = pooled;
-    }
+    Spread use = spread_of(s, scale, "figure");
+    if (s.contains("family") && families.contains(s["family"].get<std::string>()))
+      if (const Spread pooled = spread_of(families[s["family"].get<std::string>()], scale, "family");
+          pooled.reach() > use.reach())
+        use = pooled;
     if (use.reach() == 0) continue;
     const Interval repeat = repeat_run({h.value, *h.low, *h.high}, use.sd, use.degrees_of_freedom);
     f["repeat_low"] = repeat.low;
     f["repeat_high"] = repeat.high;
     f["run_to_run_sd"] = use.sd;
-    f["run_to_run_t"] = student_t_975(use.degrees_of_freedom);
+    f["run_to_run_t"] = use.t;
     f["run_to_run_from"] = use.from;
   }
 }
