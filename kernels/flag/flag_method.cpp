@@ -110,6 +110,19 @@ int cpu_band_rows(const FlagConfig& c, int w) {
   return flag_stream_band_rows(c.band_rows, true, reach_rows, row_bytes);
 }
 
+// The CPU path cpu_reference takes for these options; cpu_work reads the same choice, so the work
+// model follows the dispatch. fused: flag_blur's strips (the disc at full resolution, a per-value
+// precision, not streamed); whole_buffer: flag_blur_reference (bracketed precisions span rows).
+enum class CpuPath { shape, adaptive, reduced, streamed, whole_buffer, fused };
+CpuPath cpu_path(const FilterOptions& o, const FlagConfig& c, int width_px) {
+  if (!o.aperture.is_disc()) return CpuPath::shape;
+  if (c.adaptive) return CpuPath::adaptive;
+  if (c.buffer_scale != 1) return CpuPath::reduced;
+  if (cpu_band_rows(c, width_px) > 0) return CpuPath::streamed;
+  if (is_bracketed(c.precision)) return CpuPath::whole_buffer;
+  return CpuPath::fused;
+}
+
 // adaptive = on, as the GPU computes it: FLAG on its grid (full or reduced) with the layers the
 // scene's largest disc needs (the same image as with ceil(N/2): scene_sized_pattern), then every
 // pixel of a tile nothing blurred reaches (D = 0) gets its input instead of its round trip through
@@ -251,14 +264,18 @@ void declare_flag(std::vector<Method>& methods) {
   m.aperture_unsupported = flag_shape_unsupported;
   m.cpu_reference = [](const CpuInput& in) {
     const FlagConfig c = flag_config(in.options);
-    if (!in.options.aperture.is_disc())
-      return flag_shape_blur(in.color, in.radius_px, FlagShapeTable(in.options.aperture, c.pattern), c.pattern,
-                             c.precision, in.threads);
-    if (c.adaptive) return flag_adaptive_cpu(in, c);
-    if (c.buffer_scale != 1)
-      return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);
-    if (const int band = cpu_band_rows(c, in.packed.width); band > 0)
-      return flag_blur_streamed(in.packed, c.pattern, c.precision, band, in.threads);
+    switch (cpu_path(in.options, c, in.packed.width)) {
+      case CpuPath::shape:
+        return flag_shape_blur(in.color, in.radius_px, FlagShapeTable(in.options.aperture, c.pattern), c.pattern,
+                               c.precision, in.threads);
+      case CpuPath::adaptive: return flag_adaptive_cpu(in, c);
+      case CpuPath::reduced:
+        return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);
+      case CpuPath::streamed:
+        return flag_blur_streamed(in.packed, c.pattern, c.precision, cpu_band_rows(c, in.packed.width), in.threads);
+      case CpuPath::whole_buffer: return flag_blur_reference(in.packed, c.pattern, c.precision, in.threads);
+      case CpuPath::fused: break;
+    }
     return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
   m.make_gpu = make_flag_gpu;
@@ -282,9 +299,7 @@ void declare_flag(std::vector<Method>& methods) {
   // image (3 floats a pixel) written once. Every other CPU path moves its layers as the GPU passes do.
   m.cpu_work = [gpu_work = m.work](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
-    if (!o.aperture.is_disc() || c.adaptive || c.buffer_scale != 1 || is_bracketed(c.precision) ||
-        cpu_band_rows(c, w) > 0)
-      return gpu_work(o, w, h);
+    if (cpu_path(o, c, w) != CpuPath::fused) return gpu_work(o, w, h);
     const double pixels = static_cast<double>(w) * h;
     return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12}};
   };
