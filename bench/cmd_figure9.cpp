@@ -565,11 +565,12 @@ void print_summary(const nlohmann::json& doc) {
     return;
   }
   const std::string drift = probe_drift_text(h["probe_drift"]);
-  // A process stops when its own rounds settle; the spread between processes can still widen the joined figures.
+  // The rounds stop when the figures so far settle (a later process judging the earlier processes'
+  // rounds with its own); the whole run's can still come out wider (rounds measured after a point left).
   const bool widened = runner::stopped_settled(stop);
   fmt::print("NOT SETTLED ({} after {} rounds): the machine was too noisy for these figures at the targets ({}):\n",
-             widened ? "each process settled on its own rounds; the spread between processes widened the joined "
-                       "intervals"
+             widened ? "the rounds stopped when their figures settled; the whole run's, widened by the spread between "
+                       "its processes, did not"
                      : stop,
              doc["measurement"]["rounds"].get<int>(), targets);
   for (const auto& u : h["unsettled"]) fmt::print("  {}\n", u.get<std::string>());
@@ -629,13 +630,15 @@ void figure9(Figure9Options& o) {
   // Not before 10 rounds: a figure stopped the first time its interval looks tight is claimed tighter
   // than it is, the more so the fewer rounds it has (measured with the bootstrap intervals used before:
   // leaving from 5 rounds on, two default runs agreed on 14 of 18 figures and their 95% intervals
-  // covered each other for 10 of 18).
+  // covered each other for 10 of 18). In a run of several processes, a later one sees the rounds of
+  // those before it too (SweepSettings::run_out_dir), and the figures widened by their spread, as the
+  // run's summary will give them.
   s.points_needed = [&points, target_ratio, target_exponent](const runner::RunRecord& record,
                                                               const nlohmann::json& context) {
     if (record.round_order.size() < 10) return std::vector<bool>(points.size(), true);
     const std::set<std::string> needed =
         figures(round_points(points, record, context.value("device", nlohmann::json())), Metric::lead, target_ratio,
-                target_exponent, true)
+                target_exponent, true, record.round_process)
             .needed;
     std::vector<bool> out;
     for (const auto& p : points)

@@ -343,6 +343,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
     s.policy.budget_s = budget_s / count;
     s.policy.seed = seed + static_cast<unsigned>(k - 1);
     s.out_dir = processes::part_dir(out_dir, name, k);
+    s.run_out_dir = out_dir;
     s.plot = false;
     s.store_url.clear();
   }

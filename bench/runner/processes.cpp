@@ -94,18 +94,44 @@ void append(Joined& joined, const std::map<std::string, std::size_t>& index_of, 
       r.skipped = p.value("reason", "skipped");
 }
 
+// No rounds yet, for the points `ids`; index_of: each id's index.
+Joined nothing_joined(const std::vector<std::string>& ids, std::map<std::string, std::size_t>& index_of) {
+  Joined joined;
+  joined.points.resize(ids.size());
+  joined.record.points.resize(ids.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) joined.record.points[i].name = ids[i], index_of[ids[i]] = i;
+  return joined;
+}
+
+// Process k's results file in its part_dir: the complete one, else the partial one (it was interrupted).
+std::filesystem::path written_by(const std::string& out_dir, const std::string& name, int k) {
+  const std::filesystem::path dir = part_dir(out_dir, name, k);
+  const std::filesystem::path complete = dir / (name + ".json");
+  return std::filesystem::exists(complete) ? complete : dir / (name + ".partial.json");
+}
+
 }  // namespace
 
 std::string part_dir(const std::string& out_dir, const std::string& name, int index) {
   return (std::filesystem::path(out_dir) / (name + ".processes") / std::to_string(index)).string();
 }
 
-Joined run(const std::vector<std::string>& ids, const SweepSettings& s) {
-  Joined joined;
-  joined.points.resize(ids.size());
-  joined.record.points.resize(ids.size());
+Joined join_earlier(const std::vector<std::string>& ids, const std::string& out_dir, const std::string& name,
+                    int before) {
   std::map<std::string, std::size_t> index_of;
-  for (std::size_t i = 0; i < ids.size(); ++i) joined.record.points[i].name = ids[i], index_of[ids[i]] = i;
+  Joined joined = nothing_joined(ids, index_of);
+  for (int k = 1; k <= before; ++k) {
+    const std::filesystem::path written = written_by(out_dir, name, k);
+    if (!std::filesystem::exists(written))
+      throw std::runtime_error(fmt::format("process {} of this run wrote no results ({})", k, written.string()));
+    append(joined, index_of, read_json(written), k - 1);
+  }
+  return joined;
+}
+
+Joined run(const std::vector<std::string>& ids, const SweepSettings& s) {
+  std::map<std::string, std::size_t> index_of;
+  Joined joined = nothing_joined(ids, index_of);
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::string> reasons;
   std::string failure;
@@ -122,8 +148,7 @@ Joined run(const std::vector<std::string>& ids, const SweepSettings& s) {
     std::vector<std::string> args = command_line_words();
     args.insert(args.end(), {"--process", fmt::format("{}/{}", k, s.processes)});
     const std::string ended = run_and_wait(args);
-    const std::filesystem::path complete = dir / (s.name + ".json"), partial = dir / (s.name + ".partial.json");
-    const std::filesystem::path written = std::filesystem::exists(complete) ? complete : partial;
+    const std::filesystem::path written = written_by(s.out_dir, s.name, k);
     if (!std::filesystem::exists(written)) {
       const std::string what = fmt::format("process {} of {} {} and wrote no results (its messages are above)", k,
                                            s.processes, ended.empty() ? "ended" : ended);
@@ -142,13 +167,9 @@ Joined run(const std::vector<std::string>& ids, const SweepSettings& s) {
   }
   runner::RunRecord& rec = joined.record;
   rec.status = failure.empty() ? "complete" : "interrupted";
-  // The run's reason is one of the runner's: the first process's that did not settle, if any.
-  rec.stop_reason = failure.empty() ? reasons.front() : "interrupted";
-  for (const std::string& reason : reasons)
-    if (!runner::stopped_settled(reason)) {
-      if (failure.empty()) rec.stop_reason = reason;
-      break;
-    }
+  // The run's reason is one of the runner's: the last process's, which judged the figures on every
+  // process's rounds (SweepSettings::run_out_dir).
+  rec.stop_reason = failure.empty() ? reasons.back() : "interrupted";
   rec.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (failure.empty()) std::filesystem::remove_all(std::filesystem::path(s.out_dir) / (s.name + ".processes"));
   fmt::print("\n== {} processes, {} rounds in all{} ==\n", reasons.size(), rec.round_order.size(),

@@ -34,6 +34,12 @@ struct Joined {
   std::vector<nlohmann::json> points;
 };
 
+// The results files of processes 1..before of a run (part_dir, complete or partial), joined as run()
+// joins them: the rounds process `before + 1` follows when it judges which figures are still too wide
+// (SweepSettings::earlier_processes). A missing file throws std::runtime_error naming it.
+Joined join_earlier(const std::vector<std::string>& ids, const std::string& out_dir, const std::string& name,
+                    int before);
+
 // Runs settings.processes processes of this command line in turn and joins what they wrote. An
 // interruption (forwarded to the process running) or a process that fails ends the run there, with
 // what the finished processes measured (status "interrupted"); throws std::runtime_error when the

@@ -11,6 +11,8 @@
 #include <random>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 namespace bokeh::runner {
 
 namespace {
@@ -372,6 +374,30 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
   if (interrupted()) record.stop_reason = "interrupted";
   record.elapsed_s = seconds_since(start);
   return record;
+}
+
+RunRecord followed_by(RunRecord earlier, const RunRecord& later) {
+  if (earlier.points.size() != later.points.size())
+    throw std::invalid_argument(fmt::format("followed_by: {} points before, {} after", earlier.points.size(),
+                                            later.points.size()));
+  const int offset = static_cast<int>(earlier.round_order.size());
+  if (earlier.round_process.size() < earlier.round_order.size()) earlier.round_process.resize(earlier.round_order.size(), 0);
+  const int process = earlier.round_process.empty()
+                          ? 0
+                          : *std::max_element(earlier.round_process.begin(), earlier.round_process.end()) + 1;
+  for (const auto& order : later.round_order) {
+    earlier.round_order.push_back(order);
+    earlier.round_process.push_back(process);
+  }
+  for (std::size_t i = 0; i < later.points.size(); ++i) {
+    PointRecord& to = earlier.points[i];
+    const PointRecord& from = later.points[i];
+    to.samples.insert(to.samples.end(), from.samples.begin(), from.samples.end());
+    for (int round : from.sample_round) to.sample_round.push_back(offset + round);
+    if (!from.samples.empty() || to.samples.empty()) to.skipped = from.skipped;
+    to.settled = from.settled;
+  }
+  return earlier;
 }
 
 }  // namespace bokeh::runner

@@ -101,6 +101,11 @@ inline bool budget_spent(double elapsed_s, double next_round_s, double budget_s)
   return elapsed_s + next_round_s / 2 >= budget_s;
 }
 
+// `earlier`'s rounds followed by `later`'s (the same points, in the same order), `later`'s measured by
+// the process after the last of `earlier`'s: a run of several processes as a later one of them sees it,
+// its own rounds after those the processes before it measured (processes.hpp). Probes are not joined.
+RunRecord followed_by(RunRecord earlier, const RunRecord& later);
+
 // Whether a run's rounds ended because its figures settled (not on the budget, a cap or an interrupt).
 inline bool stopped_settled(const std::string& stop_reason) {
   return stop_reason == "every point settled" || stop_reason == "headlines settled";

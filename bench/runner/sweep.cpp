@@ -716,8 +716,16 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     std::map<std::string, std::size_t> blocks;
     for (const auto& p : points) hooks.visit_block.push_back(blocks.emplace(s.visit_block(p), blocks.size()).first->second);
   }
-  if (s.points_needed)
-    hooks.points_needed = [&](const runner::RunRecord& record) { return s.points_needed(record, context); };
+  if (s.points_needed) {
+    // A later process of several judges the run's figures, the earlier processes' rounds and its own:
+    // its own alone (a third of them) would rarely reach the rounds or the width a figure settles at.
+    const runner::RunRecord earlier =
+        s.process_index > 1 ? processes::join_earlier(names, s.run_out_dir, s.name, s.process_index - 1).record
+                            : runner::RunRecord{};
+    hooks.points_needed = [&s, &context, earlier](const runner::RunRecord& record) {
+      return s.points_needed(s.process_index > 1 ? runner::followed_by(earlier, record) : record, context);
+    };
+  }
 
   fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s{}\n", s.name, points.size(),
              measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),

@@ -99,6 +99,9 @@ struct SweepSettings {
   // > 1: the run is measured by this many processes one after another (processes.hpp), each this same
   // command line with --process k/P (process_index k, 0 in the run that joins them).
   int processes = 1, process_index = 0;
+  // Process k > 1 of several: the run's out_dir, where the processes before it wrote their results
+  // (processes::part_dir); its points_needed reads their rounds followed by its own.
+  std::string run_out_dir;
   // The results store the run is appended to (store.hpp); empty: none.
   std::string store_url;
   // A further reference for some points (e.g. full-resolution f32 FLAG for `buffers`): the point's

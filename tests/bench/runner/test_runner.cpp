@@ -247,6 +247,44 @@ TEST(Runner, TheBudgetEndsTheRoundsNearestToIt) {
   EXPECT_FALSE(runner::budget_spent(99.9, 0, 100));
 }
 
+// A later process of a run sees the rounds of those before it, then its own: rounds renumbered after
+// the earlier ones, each tagged with the process that measured it, each point's samples in order.
+TEST(Runner, ALaterProcessFollowsTheEarlierProcessesRounds) {
+  RunRecord earlier;
+  earlier.points.resize(2);
+  earlier.round_order = {{0, 1}, {1, 0}, {0, 1}};
+  earlier.round_process = {0, 0, 1};  // two processes before
+  earlier.points[0].samples = {{1.0, {}, 2.0}, {1.1, {}, 2.1}, {1.2, {}, 2.2}};
+  earlier.points[0].sample_round = {0, 1, 2};
+  earlier.points[1].samples = {{5.0, {}, 6.0}};  // it left the rounds after the first
+  earlier.points[1].sample_round = {0};
+  RunRecord later;
+  later.points.resize(2);
+  later.round_order = {{1, 0}, {0}};
+  later.points[0].samples = {{1.3, {}, 2.3}, {1.4, {}, 2.4}};
+  later.points[0].sample_round = {0, 1};
+  later.points[1].samples = {{5.5, {}, 6.5}};
+  later.points[1].sample_round = {0};
+  later.points[1].settled = true;
+
+  const RunRecord joined = runner::followed_by(earlier, later);
+  EXPECT_EQ(joined.round_order, (std::vector<std::vector<std::size_t>>{{0, 1}, {1, 0}, {0, 1}, {1, 0}, {0}}));
+  EXPECT_EQ(joined.round_process, (std::vector<int>{0, 0, 1, 2, 2}));
+  EXPECT_EQ(joined.points[0].sample_round, (std::vector<int>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(joined.points[0].frame_ms(), (std::vector<double>{1.0, 1.1, 1.2, 1.3, 1.4}));
+  EXPECT_EQ(joined.points[0].cpu_ms(), (std::vector<double>{2.0, 2.1, 2.2, 2.3, 2.4}));
+  EXPECT_EQ(joined.points[1].sample_round, (std::vector<int>{0, 3}));
+  EXPECT_TRUE(joined.points[1].settled);
+
+  RunRecord first_process;  // one process before, its rounds untagged
+  first_process.points.resize(2);
+  first_process.round_order = {{0, 1}};
+  EXPECT_EQ(runner::followed_by(first_process, later).round_process, (std::vector<int>{0, 1, 1}));
+  RunRecord other_points;
+  other_points.points.resize(3);
+  EXPECT_THROW(runner::followed_by(other_points, later), std::invalid_argument);
+}
+
 // A group's points are visited back to back in every round and take turns going first, so a ratio
 // of theirs is measured side by side; the groups' order is still shuffled.
 TEST(Runner, PointsOfAGroupAreVisitedBackToBackTakingTurnsFirst) {
