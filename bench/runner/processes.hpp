@@ -36,7 +36,7 @@ struct Joined {
 
 // The results files of processes 1..before of a run (part_dir, complete or partial), joined as run()
 // joins them: the rounds process `before + 1` follows when it judges which figures are still too wide
-// (SweepSettings::earlier_processes). A missing file throws std::runtime_error naming it.
+// (SweepSettings::run_out_dir). A missing file throws std::runtime_error naming it.
 Joined join_earlier(const std::vector<std::string>& ids, const std::string& out_dir, const std::string& name,
                     int before);
 
