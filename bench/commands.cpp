@@ -277,7 +277,9 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
   cmd->add_option("--device", device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--seed", seed, "Seed of the shuffled measuring order")->capture_default_str();
   cmd->add_option("--out-dir", out_dir, "Where the results files go")->capture_default_str();
-  cmd->add_option("--plots-dir", plots_dir, "Where the plots go")->capture_default_str();
+  cmd->add_option("--plots-dir", plots_dir,
+                  "Where the plots go (default: plots/, or the --out-dir when one is given, so that a run kept "
+                  "elsewhere leaves plots/ as it is)");
   cmd->add_option("--reference-cache", reference_cache, "Directory caching the exact references")->capture_default_str();
   cmd->add_flag("!--no-plot", plot, "Skip the plot");
   cmd->add_option("--inject-slowdown-pct", inject_slowdown_pct,
@@ -316,7 +318,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.name = name;
   s.plot_script = plot_script;
   s.out_dir = out_dir;
-  s.plots_dir = plots_dir;
+  s.plots_dir = !plots_dir.empty() ? plots_dir : out_dir == "results" ? "plots" : out_dir;
   s.reference_cache = reference_cache;
   s.device = device;
   s.cpu_threads = cpu_threads;

@@ -79,7 +79,8 @@ struct AxisFlags {
 // What every sweep command takes: budget, device, output folders, memory budget, seed.
 struct SweepFlags {
   double budget_s = 0;
-  std::string device, out_dir = "results", plots_dir = "plots", reference_cache = "build/reference-cache";
+  std::string device, out_dir = "results", reference_cache = "build/reference-cache";
+  std::string plots_dir;  // --plots-dir; empty: plots/ beside the default --out-dir, else that --out-dir
   int cpu_threads = 0;
   double max_buffer_mb = 0;
   double sample_ms = 60;     // --sample-ms: runner::Policy::sample_min_ms
