@@ -54,44 +54,46 @@ nlohmann::json read_json(const std::filesystem::path& path) {
   return nlohmann::json::parse(in);
 }
 
-// Appends one process's results document to `joined`: its rounds after those already there.
-void append(Joined& joined, const std::map<std::string, std::size_t>& index_of, const nlohmann::json& doc,
-            int process) {
-  runner::RunRecord& rec = joined.record;
-  const int offset = static_cast<int>(rec.round_order.size());
+// One process's results document as a record of the run's points (index_of: each id's index), its
+// rounds numbered from 0 (runner::followed_by puts them after the rounds before).
+runner::RunRecord record_of(const nlohmann::json& doc, const std::map<std::string, std::size_t>& index_of) {
+  runner::RunRecord rec;
+  rec.points.resize(index_of.size());
   const auto& m = doc.at("measurement");
   for (const auto& ids : m.at("round_order")) {
     std::vector<std::size_t> order;
     for (const auto& id : ids) order.push_back(index_of.at(id.get<std::string>()));
     rec.round_order.push_back(std::move(order));
-    rec.round_process.push_back(process);
   }
   const nlohmann::json probes = m.value("probes", nlohmann::json::object());
   for (const auto& [name, probe] : probes.items()) {
-    for (double ms : probe.at("ms_per_round")) rec.probe_ms[name].push_back(ms);
-    for (double ms : probe.at("cpu_ms_per_round")) rec.probe_cpu_ms[name].push_back(ms);
+    rec.probe_ms[name] = probe.at("ms_per_round").get<std::vector<double>>();
+    rec.probe_cpu_ms[name] = probe.at("cpu_ms_per_round").get<std::vector<double>>();
   }
   for (const auto& p : doc.at("points")) {
-    const std::size_t i = index_of.at(p.at("id").get<std::string>());
-    runner::PointRecord& r = rec.points[i];
+    runner::PointRecord& r = rec.points[index_of.at(p.at("id").get<std::string>())];
     const auto& frame = p.at("samples_ms");
     for (std::size_t s = 0; s < frame.size(); ++s) {
       runner::Sample sample{frame[s].get<double>(), {}, p.at("samples_cpu_ms")[s].get<double>()};
       for (const auto& [pass, values] : p.at("samples_pass_ms").items()) sample.pass_ms[pass] = values[s].get<double>();
       r.samples.push_back(std::move(sample));
-      r.sample_round.push_back(offset + p.at("sample_rounds")[s].get<int>());
+      r.sample_round.push_back(p.at("sample_rounds")[s].get<int>());
     }
-    for (double ms : p.at("warm_up_ms")) r.warm_up_ms.push_back(ms);
-    r.frames_per_sample = r.frames_per_sample ? r.frames_per_sample : p.at("frames_per_sample").get<int>();
-    r.wall_s += p.value("measure_wall_s", 0.0);
+    r.warm_up_ms = p.at("warm_up_ms").get<std::vector<double>>();
+    r.frames_per_sample = p.at("frames_per_sample").get<int>();
+    r.wall_s = p.value("measure_wall_s", 0.0);
     r.settled = p.value("settled", false);
-    r.skipped.clear();  // measured here, whatever an earlier process found
-    if (joined.points[i].is_null()) joined.points[i] = p;
   }
   const nlohmann::json skipped = doc.value("skipped", nlohmann::json::array());
-  for (const auto& p : skipped)
-    if (auto& r = rec.points[index_of.at(p.at("id").get<std::string>())]; r.samples.empty())
-      r.skipped = p.value("reason", "skipped");
+  for (const auto& p : skipped) rec.points[index_of.at(p.at("id").get<std::string>())].skipped = p.value("reason", "skipped");
+  return rec;
+}
+
+// Appends one process's results document to `joined`: its rounds after those already there.
+void append(Joined& joined, const std::map<std::string, std::size_t>& index_of, const nlohmann::json& doc) {
+  joined.record = runner::followed_by(std::move(joined.record), record_of(doc, index_of));
+  for (const auto& p : doc.at("points"))
+    if (auto& first = joined.points[index_of.at(p.at("id").get<std::string>())]; first.is_null()) first = p;
 }
 
 // No rounds yet, for the points `ids`; index_of: each id's index.
@@ -124,7 +126,7 @@ Joined join_earlier(const std::vector<std::string>& ids, const std::string& out_
     const std::filesystem::path written = written_by(out_dir, name, k);
     if (!std::filesystem::exists(written))
       throw std::runtime_error(fmt::format("process {} of this run wrote no results ({})", k, written.string()));
-    append(joined, index_of, read_json(written), k - 1);
+    append(joined, index_of, read_json(written));
   }
   return joined;
 }
@@ -157,7 +159,7 @@ Joined run(const std::vector<std::string>& ids, const SweepSettings& s) {
       break;
     }
     const nlohmann::json doc = read_json(written);
-    append(joined, index_of, doc, k - 1);
+    append(joined, index_of, doc);
     reasons.push_back(doc["measurement"].value("stop_reason", "interrupted"));
     fmt::print("process {} of {}: {} rounds, {}\n", k, s.processes, doc["measurement"].value("rounds", 0), reasons.back());
     if (!ended.empty() || doc.value("status", "") != "complete")

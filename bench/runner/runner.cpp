@@ -389,13 +389,23 @@ RunRecord followed_by(RunRecord earlier, const RunRecord& later) {
     earlier.round_order.push_back(order);
     earlier.round_process.push_back(process);
   }
+  for (const auto& [name, ms] : later.probe_ms) earlier.probe_ms[name].insert(earlier.probe_ms[name].end(), ms.begin(), ms.end());
+  for (const auto& [name, ms] : later.probe_cpu_ms)
+    earlier.probe_cpu_ms[name].insert(earlier.probe_cpu_ms[name].end(), ms.begin(), ms.end());
   for (std::size_t i = 0; i < later.points.size(); ++i) {
     PointRecord& to = earlier.points[i];
     const PointRecord& from = later.points[i];
+    if (from.samples.empty()) {  // not measured later: a reason it was skipped counts where nothing measured it
+      if (to.samples.empty() && !from.skipped.empty()) to.skipped = from.skipped;
+      continue;
+    }
     to.samples.insert(to.samples.end(), from.samples.begin(), from.samples.end());
     for (int round : from.sample_round) to.sample_round.push_back(offset + round);
-    if (!from.samples.empty() || to.samples.empty()) to.skipped = from.skipped;
+    to.warm_up_ms.insert(to.warm_up_ms.end(), from.warm_up_ms.begin(), from.warm_up_ms.end());
+    if (to.frames_per_sample == 0) to.frames_per_sample = from.frames_per_sample;
+    to.wall_s += from.wall_s;
     to.settled = from.settled;
+    to.skipped.clear();  // measured later, whatever stopped it before
   }
   return earlier;
 }

@@ -103,7 +103,9 @@ inline bool budget_spent(double elapsed_s, double next_round_s, double budget_s)
 
 // `earlier`'s rounds followed by `later`'s (the same points, in the same order), `later`'s measured by
 // the process after the last of `earlier`'s: a run of several processes as a later one of them sees it,
-// its own rounds after those the processes before it measured (processes.hpp). Probes are not joined.
+// its own rounds after those the processes before it measured (processes.hpp), and how processes::run
+// joins the processes' results. A point measured later takes the later settled flag and is not skipped;
+// one not measured later keeps what it had, or the later reason it was skipped if nothing measured it.
 RunRecord followed_by(RunRecord earlier, const RunRecord& later);
 
 // Whether a run's rounds ended because its figures settled (not on the budget, a cap or an interrupt).

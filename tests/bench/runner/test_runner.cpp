@@ -266,8 +266,20 @@ TEST(Runner, ALaterProcessFollowsTheEarlierProcessesRounds) {
   later.points[1].samples = {{5.5, {}, 6.5}};
   later.points[1].sample_round = {0};
   later.points[1].settled = true;
+  earlier.probe_ms["copy"] = {1, 2, 3};
+  later.probe_ms["copy"] = {4, 5};
+  earlier.points[0].warm_up_ms = {9.0};
+  earlier.points[0].frames_per_sample = 3;
+  earlier.points[0].wall_s = 1.5;
+  later.points[0].warm_up_ms = {8.0};
+  later.points[0].frames_per_sample = 4;
+  later.points[0].wall_s = 0.5;
 
   const RunRecord joined = runner::followed_by(earlier, later);
+  EXPECT_EQ(joined.probe_ms.at("copy"), (std::vector<double>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(joined.points[0].warm_up_ms, (std::vector<double>{9.0, 8.0}));
+  EXPECT_EQ(joined.points[0].frames_per_sample, 3);  // the first process's
+  EXPECT_DOUBLE_EQ(joined.points[0].wall_s, 2.0);
   EXPECT_EQ(joined.round_order, (std::vector<std::vector<std::size_t>>{{0, 1}, {1, 0}, {0, 1}, {1, 0}, {0}}));
   EXPECT_EQ(joined.round_process, (std::vector<int>{0, 0, 1, 2, 2}));
   EXPECT_EQ(joined.points[0].sample_round, (std::vector<int>{0, 1, 2, 3, 4}));
@@ -275,6 +287,17 @@ TEST(Runner, ALaterProcessFollowsTheEarlierProcessesRounds) {
   EXPECT_EQ(joined.points[0].cpu_ms(), (std::vector<double>{2.0, 2.1, 2.2, 2.3, 2.4}));
   EXPECT_EQ(joined.points[1].sample_round, (std::vector<int>{0, 3}));
   EXPECT_TRUE(joined.points[1].settled);
+
+  // Skipped: a later reason counts only where nothing measured the point; measuring it later clears one.
+  RunRecord skipped_later = later;
+  skipped_later.points[1] = {};
+  skipped_later.points[1].skipped = "out of memory";
+  EXPECT_EQ(runner::followed_by(earlier, skipped_later).points[1].skipped, "");
+  RunRecord never_measured = earlier;
+  never_measured.points[1] = {};
+  EXPECT_EQ(runner::followed_by(never_measured, skipped_later).points[1].skipped, "out of memory");
+  never_measured.points[1].skipped = "too slow";
+  EXPECT_EQ(runner::followed_by(never_measured, later).points[1].skipped, "");
 
   RunRecord first_process;  // one process before, its rounds untagged
   first_process.points.resize(2);
