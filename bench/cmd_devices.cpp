@@ -21,10 +21,18 @@ void add_devices_command(CLI::App& app) {
 }
 
 void add_methods_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("methods", "List the registered methods: precisions, buffer scales and their own options");
+  auto* cmd = app.add_subcommand("methods", "List the registered methods (and the method packages named: PACKAGE...): "
+                                             "precisions, buffer scales and their own options");
+  // Packages named here were loaded before parsing (main.cpp); the words only need accepting.
+  static std::vector<std::string> packages;
+  cmd->add_option("packages", packages, "Method package folders to list beside the built-ins");
   cmd->callback([] {
-    for (const Method& m : registered_methods()) {
+    for (const Method* method : known_methods()) {
+      const Method& m = *method;
       fmt::print("{}{}: {}\n", m.name, m.in_default_sweeps ? "" : " (not in default sweeps: name it)", m.description);
+      if (!m.package.is_null())
+        fmt::print("    method package {} (content hash {})\n", m.package["path"].get<std::string>(),
+                   m.package["hash"].get<std::string>());
       fmt::print("    precisions {} (default first), buffer scales {}\n", fmt::join(m.precisions, ", "),
                  fmt::join(m.buffer_scales, ", "));
       for (const OptionSpec& spec : m.options) {

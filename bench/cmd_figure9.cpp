@@ -309,9 +309,10 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
   Figures out;
   std::set<std::string> variants;
   for (const auto& p : points) variants.insert(p.variant);
-  for (const Method& m : registered_methods())
+  for (const Method* method : known_methods())
     for (const std::string& variant : variants)
       for (const char* backend : {"gpu", "cpu"}) {
+        const Method& m = *method;
         std::vector<const RoundPoint*> pts;
         for (const auto& p : points)
           if (p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);

@@ -16,8 +16,8 @@ namespace bokeh {
 void MethodOptionFlags::add_to(CLI::App* cmd) {
   // An option several methods share (adaptive) is one flag; its help gathers each distinct meaning.
   std::vector<std::pair<const OptionSpec*, std::string>> flags;  // the first spec of each key, the help
-  for (const Method& m : registered_methods())
-    for (const OptionSpec& spec : m.options) {
+  for (const Method* m : known_methods())
+    for (const OptionSpec& spec : m->options) {
       auto it = std::find_if(flags.begin(), flags.end(), [&](const auto& f) { return f.first->key == spec.key; });
       if (it == flags.end())
         flags.emplace_back(&spec, spec.help);
@@ -37,8 +37,8 @@ std::map<std::string, double> MethodOptionFlags::values_for(const std::vector<st
       if ((spec = find_method(name).option(key))) break;
     if (!spec) {
       std::string owners;
-      for (const Method& m : registered_methods())
-        if (m.option(key)) owners += (owners.empty() ? "" : ", ") + m.name;
+      for (const Method* m : known_methods())
+        if (m->option(key)) owners += (owners.empty() ? "" : ", ") + m->name;
       std::string flag = "--" + key;
       std::replace(flag.begin(), flag.end(), '_', '-');
       throw std::invalid_argument(fmt::format("{} applies to {}, none of the methods chosen ({})", flag, owners,

@@ -149,5 +149,6 @@ void add_adaptive_command(CLI::App& app);
 void add_history_command(CLI::App& app);
 void add_report_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
+void add_check_command(CLI::App& app);
 
 }  // namespace bokeh

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "package.hpp"
 #include "report.hpp"
 
 namespace {
@@ -24,8 +25,24 @@ int with_output_written(int code) {
   return 1;
 }
 
+// Method packages named anywhere on the command line are loaded (and their shaders compiled) before
+// the CLI is built, so their own options become flags and a bad package fails before any work.
+void load_packages(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    std::string word = argv[i];
+    if (word.rfind("--", 0) == 0 && word.find('=') != std::string::npos) word = word.substr(word.find('=') + 1);
+    if (bokeh::is_package_reference(word)) bokeh::load_package(word);
+  }
+}
+
 int run(int argc, char** argv) {
   bokeh::set_command_line(argc, argv);
+  try {
+    load_packages(argc, argv);
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "bokehbench: error: {}\n", e.what());
+    return 1;
+  }
   CLI::App app{"bokehbench: cost, memory and accuracy of bokeh depth-of-field filters"};
   app.require_subcommand(1);
   bokeh::add_figure9_command(app);
@@ -44,6 +61,7 @@ int run(int argc, char** argv) {
   bokeh::add_history_command(app);
   bokeh::add_report_command(app);
   bokeh::add_merge_command(app);
+  bokeh::add_check_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

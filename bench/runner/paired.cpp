@@ -250,16 +250,42 @@ struct Pairing {
 };
 
 // The two builds' workers, started together (their set-up, shader compilation included, overlaps;
-// what they measure never does), with their hellos.
+// what they measure never does), with their hellos. Two packages: one worker serves both sides, and
+// each side's hello holds its package's points (with their index in the worker's list), A's ids.
 struct Workers {
-  Worker side[2];
+  std::unique_ptr<Worker> process[2];
+  Worker* side[2] = {nullptr, nullptr};
   json hello[2];
-  Workers(const Options& o, const std::vector<std::string>& args)
-      : side{Worker("baseline", o.baseline_exe, args), Worker("candidate", o.candidate_exe, args)} {
+  Workers(const Options& o, const std::vector<std::string>& args) {
+    if (o.package_methods.empty()) {
+      process[0] = std::make_unique<Worker>("baseline", o.baseline_exe, args);
+      process[1] = std::make_unique<Worker>("candidate", o.candidate_exe, args);
+    } else {
+      process[0] = std::make_unique<Worker>("packages", o.baseline_exe, args);
+    }
+    for (int k = 0; k < 2; ++k) side[k] = process[k] ? process[k].get() : process[0].get();
     for (int k = 0; k < 2; ++k) {
-      const json h = side[k].read();
-      if (!h.contains("hello")) throw std::runtime_error(fmt::format("the {} worker did not say hello: {}", side[k].role(), h.dump()));
+      if (!process[k]) continue;
+      const json h = process[k]->read();
+      if (!h.contains("hello")) throw std::runtime_error(fmt::format("the {} worker did not say hello: {}", process[k]->role(), h.dump()));
       hello[k] = h["hello"];
+    }
+    if (!o.package_methods.empty()) split_by_package(o.package_methods);
+  }
+
+ private:
+  void split_by_package(const std::vector<std::string>& names) {
+    const json all = hello[0];
+    for (int k = 0; k < 2; ++k) {
+      hello[k] = all;
+      hello[k]["points"] = json::array();
+      for (std::size_t i = 0; i < all["points"].size(); ++i) {
+        json p = all["points"][i];
+        if (p["method"] != names[k]) continue;
+        p["index"] = i;
+        p["id"] = names[0] + p["id"].get<std::string>().substr(names[k].size());
+        hello[k]["points"].push_back(std::move(p));
+      }
     }
   }
 };
@@ -272,9 +298,9 @@ int measure(std::vector<Pairing>& pairings, const std::vector<std::size_t>& chos
   const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   const auto ask = [&](Pairing& p, int side, json request) {
     request["point"] = p.index[side];
-    json reply = w.side[side].request(request);
+    json reply = w.side[side]->request(request);
     if (reply.contains("error"))
-      p.skipped = fmt::format("the {} build failed it: {}", w.side[side].role(), reply["error"].get<std::string>());
+      p.skipped = fmt::format("the {} build failed it: {}", w.side[side]->role(), reply["error"].get<std::string>());
     return reply;
   };
   // Warm-up, which build goes first alternating; samples are sized on the baseline.
@@ -363,15 +389,15 @@ compare::Report describe_builds(const json hello[2], const Workers& workers, con
   compare::Report report;
   report.design = "paired";
   const auto commit = [](const json& h) { return h["context"].value("git_commit", std::string("?")); };
-  report.baseline_path = fmt::format("{} (commit {})", o.baseline_exe, commit(hello[0]));
-  report.current_path = fmt::format("{} (commit {})", o.candidate_exe, commit(hello[1]));
+  report.baseline_path = o.labels[0].empty() ? fmt::format("{} (commit {})", o.baseline_exe, commit(hello[0])) : o.labels[0];
+  report.current_path = o.labels[1].empty() ? fmt::format("{} (commit {})", o.candidate_exe, commit(hello[1])) : o.labels[1];
   report.options.rule = o.rule;
   report.options.times = o.times;
   report.options.normalise = "none";
   for (int side = 0; side < 2; ++side) report.contexts[side] = hello[side].value("context", json::object());
   for (int side = 0; side < 2; ++side)
     if (hello[side].value("protocol", 0) != kProtocol)
-      report.mismatches.push_back(fmt::format("the {} build speaks protocol {}, this one {}", workers.side[side].role(),
+      report.mismatches.push_back(fmt::format("the {} build speaks protocol {}, this one {}", workers.side[side]->role(),
                                               hello[side].value("protocol", 0), kProtocol));
   if (!report.mismatches.empty()) return report;
   const json& context = hello[1]["context"];
@@ -415,15 +441,15 @@ std::vector<Pairing> pair_points(const json hello[2], const Workers& workers, co
     const std::string skip[2] = {bp["skip"], cp["skip"]};
     if (!skip[0].empty() || !skip[1].empty()) {
       const int k = skip[0].empty() ? 1 : 0;
-      report.notes.push_back(fmt::format("not compared, the {} skips it ({}): {}", workers.side[k].role(), skip[k], id));
+      report.notes.push_back(fmt::format("not compared, the {} skips it ({}): {}", workers.side[k]->role(), skip[k], id));
       continue;
     }
     Pairing p;
     p.id = id;
     p.backend = bp["backend"];
     p.clock = o.times == "auto" ? (software || p.backend == "cpu" ? "cpu" : "wall") : o.times;
-    p.index[0] = i;
-    p.index[1] = it->second;
+    p.index[0] = bp.value("index", i);
+    p.index[1] = cp.value("index", it->second);
     p.work[0] = bp["work"];
     p.work[1] = cp["work"];
     p.injected = o.inject_slowdown_pct > 0 &&

@@ -33,6 +33,11 @@ void serve(const std::vector<SweepPoint>& points, const SweepSettings& settings)
 
 struct Options {
   std::string baseline_exe, candidate_exe;  // bokehbench binaries
+  // Two method packages' names (A, B) in place of two builds: one worker process of baseline_exe
+  // serves the sweep over both (--methods PACKAGE_A PACKAGE_B), so they are loaded side by side and
+  // alternate sample by sample in one process; A's points pair with B's of the same axes, named as A's.
+  std::vector<std::string> package_methods;
+  std::string labels[2];  // how the report names each side ("" : the binary and its commit)
   std::vector<std::string> sweep = {"figure9", "--quick"};  // the sweep command both serve
   compare::Rule rule{0.05, 0.95, 6};  // min_samples: the fewest pairs
   int max_pairs = 15;

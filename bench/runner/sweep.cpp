@@ -241,7 +241,7 @@ struct PointInfo {
 // What names a point: its axes' values.
 nlohmann::json identity_json(const SweepPoint& p) {
   const FilterOptions& o = p.options;
-  return {{"id", p.id},
+  nlohmann::json identity = {{"id", p.id},
           {"method", p.method->name},
           {"backend", p.backend},
           {"scene", p.scene},
@@ -256,6 +256,8 @@ nlohmann::json identity_json(const SweepPoint& p) {
           {"variant", p.variant},
           {"max_coc_px", p.max_coc_px},
           {"aperture", aperture_json(o.aperture)}};
+  if (!p.method->package.is_null()) identity["package"] = p.method->package;  // name, content hash, folder
+  return identity;
 }
 
 // What a results entry of a point (point_json) knows beyond its samples: how a run measured by
@@ -359,7 +361,8 @@ std::string gbench_json(const std::string& sweep, const std::vector<SweepPoint>&
 
 nlohmann::json methods_json(const std::vector<SweepPoint>& points) {
   nlohmann::json out = nlohmann::json::array();
-  for (const Method& m : registered_methods()) {
+  for (const Method* method : known_methods()) {
+    const Method& m = *method;
     if (std::none_of(points.begin(), points.end(), [&](const SweepPoint& p) { return p.method == &m; })) continue;
     nlohmann::json options = nlohmann::json::array();
     for (const auto& s : m.options) options.push_back({{"key", s.key}, {"help", s.help}, {"default", s.to_json(s.default_value)}});
@@ -368,6 +371,7 @@ nlohmann::json methods_json(const std::vector<SweepPoint>& points) {
                    {"precisions", m.precisions},
                    {"buffer_scales", m.buffer_scales},
                    {"options", options}});
+    if (!m.package.is_null()) out.back()["package"] = m.package;
   }
   return out;
 }

@@ -85,6 +85,9 @@ struct MemoryUse {
 struct Method {
   std::string name;  // the --method value and the JSON name
   std::string description;
+  // A method package's identity (kernels/package/package.hpp): {name, hash, path[, rev]}; null for a
+  // built-in. Results carry it beside the name.
+  nlohmann::json package;
   std::vector<std::string> precisions;   // storage of intermediates it accepts, default first
   std::vector<int> buffer_scales = {1};  // resolution divisors of its intermediates it accepts
   std::vector<OptionSpec> options;
@@ -134,9 +137,13 @@ struct Method {
   nlohmann::json options_json(const FilterOptions& options) const;  // {key: value or choice name}
 };
 
-// The registered methods, in registration order (generated from kernels/CMakeLists.txt).
+// The registered (built-in) methods, in registration order (generated from kernels/CMakeLists.txt).
 const std::vector<Method>& registered_methods();
-// Throws std::invalid_argument listing the valid names.
+// The built-ins, then the method packages loaded so far (kernels/package/package.hpp).
+std::vector<const Method*> known_methods();
+// A built-in or a loaded package by name, or a package by its folder (FOLDER or FOLDER@GIT-REV, loaded
+// on first use). Throws std::invalid_argument listing the valid names, or naming what is wrong with
+// the package.
 const Method& find_method(const std::string& name);
 // Why `method` cannot draw options.aperture ("" when it can): Method::aperture_unsupported, or for a
 // method that declares none, that it draws the disc only.

@@ -1,4 +1,5 @@
 #include "exact_scatter.hpp"
+#include "fnv1a.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -465,11 +466,6 @@ void scatter_depth_ordered(const Image& color, const Image& radius_px, const Ima
   });
 }
 
-void fnv1a(std::uint64_t& hash, const void* data, std::size_t bytes) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
-}
-
 void fnv1a_image(std::uint64_t& hash, const Image& image) {
   const int shape[3] = {image.width, image.height, image.channels};
   fnv1a(hash, shape, sizeof shape);
@@ -510,7 +506,7 @@ Image exact_scatter(const Image& color, const Image& radius_px, const Image& dep
 
 std::uint64_t exact_scatter_key(const Image& color, const Image& radius_px, const Image& depth_m,
                                 ScatterComposite mode, const Aperture& aperture) {
-  std::uint64_t hash = 14695981039346656037ull;
+  std::uint64_t hash = kFnv1aOffset;
   fnv1a(hash, kAlgorithmVersion.data(), kAlgorithmVersion.size());
   fnv1a(hash, kCacheFormat.data(), kCacheFormat.size());
   const int mode_id = static_cast<int>(mode);
@@ -537,7 +533,7 @@ std::filesystem::path ExactReferenceCache::path_for(const Image& color, const Im
 namespace {
 
 std::string pixels_hash(const Image& image) {
-  std::uint64_t hash = 14695981039346656037ull;
+  std::uint64_t hash = kFnv1aOffset;
   fnv1a_image(hash, image);
   return fmt::format("{:016x}", hash);
 }

@@ -112,6 +112,11 @@ std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) 
     if (!(props.optimalTilingFeatures & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT))
       missing.push_back(fmt::format("blending into colour attachments of format {}", static_cast<int>(format)));
   }
+  if (wanted.robust_buffer_access) {
+    VkPhysicalDeviceFeatures features{};
+    vkGetPhysicalDeviceFeatures(device, &features);
+    if (!features.robustBufferAccess) missing.push_back("robust buffer access");
+  }
   if (wanted.graphics_queue) {
     std::uint32_t count = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
@@ -132,6 +137,7 @@ std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) 
 void DeviceRequirements::add(const DeviceRequirements& other) {
   subgroup_arithmetic |= other.subgroup_arithmetic;
   graphics_queue |= other.graphics_queue;
+  robust_buffer_access |= other.robust_buffer_access;
   for (VkFormat f : other.storage_image_3d_formats)
     if (std::find(storage_image_3d_formats.begin(), storage_image_3d_formats.end(), f) == storage_image_3d_formats.end())
       storage_image_3d_formats.push_back(f);
@@ -204,6 +210,7 @@ Context::Context(const std::string& selector, const DeviceRequirements& wanted) 
   vkGetPhysicalDeviceFeatures(physical_, &supported);
   features.pipelineStatisticsQuery = supported.pipelineStatisticsQuery;
   info_.pipeline_statistics = supported.pipelineStatisticsQuery == VK_TRUE;
+  features.robustBufferAccess = wanted.robust_buffer_access ? supported.robustBufferAccess : VK_FALSE;
   device_info.pEnabledFeatures = &features;
   VkDevice device = VK_NULL_HANDLE;
   VK_CHECK(vkCreateDevice(physical_, &device_info, nullptr, &device));

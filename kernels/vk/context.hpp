@@ -42,6 +42,9 @@ struct DeviceRequirements {
   std::vector<VkFormat> storage_image_3d_formats;     // formats it stores into 3D storage images
   bool graphics_queue = false;                        // it draws (graphics pipeline on the same queue)
   std::vector<VkFormat> blend_attachment_formats;     // formats it draws into with blending
+  // Not a method's: `check` asks for it so an out-of-bounds access under the validation layer is
+  // reported rather than corrupting memory or crashing (reads give 0 or in-bounds values, writes drop).
+  bool robust_buffer_access = false;
   void add(const DeviceRequirements& other);          // the union of both
 };
 

@@ -1,4 +1,5 @@
-// One suite over the registry: every method x precision x buffer scale it accepts, each at its
+// One suite over the registry (the measurements: bench/conformance.hpp, which `bokehbench check`
+// shares): every method x precision x buffer scale it accepts, each at its
 // defaults and with every other choice of each enumerated option (one option at a time: a GPU
 // block shape, adaptive = on), checked against what the method itself declares (method.hpp). A new
 // method or option is covered without editing this file.
@@ -19,12 +20,9 @@
 #include <cmath>
 #include <string>
 
-#include "coc.hpp"
+#include "conformance.hpp"
 #include "gpu_test_support.hpp"
 #include "method.hpp"
-#include "run.hpp"
-#include "scene.hpp"
-#include "test_support.hpp"
 
 namespace bokeh {
 namespace {
@@ -82,18 +80,6 @@ std::vector<Config> all_configs() {
   return configs;
 }
 
-// The lens the configuration's aperture is drawn with.
-Lens with_aperture(Lens lens, const Config& c) {
-  lens.aperture = c.options.aperture;
-  return lens;
-}
-
-double max_abs(const Image& image) {
-  double m = 0;
-  for (float v : image.pixels) m = std::max(m, double(std::abs(v)));
-  return m;
-}
-
 void skip_if_device_lacks(const Method& m, const FilterOptions& o) {
   if (const std::string missing = context().unmet(m.needs(o)); !missing.empty())
     GTEST_SKIP() << m.name << " needs " << missing << ", which " << context().info().name << " lacks";
@@ -108,39 +94,28 @@ TEST_P(Conformance, GpuMatchesCpuReferenceWithinTheStatedBound) {
   // skipped or renormalised samples, partial workgroups) is held to the same bound as the rest.
   for (const char* scene : {"hoops", "fully_defocused"}) {
     SCOPED_TRACE(scene);
-    const Scene s = make_scene(scene, 63, 46);  // not multiples of 4 or 8: partial blocks and workgroups
-    // 1.2x: some pixels clamp at the largest radius, the rest spread below it.
-    const Lens lens = with_aperture(with_max_coc_radius(s.lens, s.depth_m, c.options.pattern.max_radius_px() * 1.2), c);
-    const Image cpu = run_cpu(*c.method, s.color, s.depth_m, lens, c.options, 2);
     std::vector<vk::PassTime> passes;
-    const Image gpu = run_gpu(context(), *c.method, s.color, s.depth_m, lens, c.options, &passes);
+    bool finite = false;
+    const conformance::Measure m = conformance::gpu_matches_cpu(context(), *c.method, c.options, scene, &passes, &finite);
     // The work model names the passes the GPU driver stamps, in the same order (CoC first).
     std::vector<std::string> timed, modelled = {"coc"};
     for (const auto& p : passes) timed.push_back(p.pass);
-    for (const auto& w : c.method->work(c.options, s.color.width, s.color.height)) modelled.push_back(w.pass);
+    for (const auto& w : c.method->work(c.options, 63, 46)) modelled.push_back(w.pass);
     EXPECT_EQ(timed, modelled);
-    ASSERT_TRUE(gpu.same_shape(cpu));
-    for (float v : gpu.pixels) ASSERT_TRUE(std::isfinite(v));
-    const double error = max_abs_diff(gpu, cpu) / max_abs(cpu);
-    const double bound = c.method->gpu_tolerance(c.options);
+    ASSERT_TRUE(finite);
     std::printf("[conformance] %s %s %s 1/%d %s: GPU vs CPU %.3g of the largest value (bound %.3g)\n", scene,
                 c.method->name.c_str(), c.options.precision.c_str(), c.options.buffer_scale, choices_text(c).c_str(),
-                error, bound);
-    EXPECT_LE(error, bound);
+                m.value, m.bound);
+    EXPECT_LE(m.value, m.bound);
   }
 }
 
 TEST_P(Conformance, RadiusZeroIsTheIdentity) {
   const Config c = GetParam();
   skip_if_device_lacks(*c.method, c.options);
-  Scene s = make_scene("pillars", 64, 48);
-  s.lens.f_stop = 1e12;  // a pinhole: every radius 0
-  s.lens.aperture = c.options.aperture;
-  const double bound = c.method->storage_tolerance(c.options) * max_abs(s.color) + 1e-6 * max_abs(s.color);
-  for (const bool gpu : {false, true}) {
-    const Image out = gpu ? run_gpu(context(), *c.method, s.color, s.depth_m, s.lens, c.options)
-                          : run_cpu(*c.method, s.color, s.depth_m, s.lens, c.options, 2);
-    EXPECT_LE(max_abs_diff(out, s.color), bound) << (gpu ? "GPU" : "CPU");
+  for (const auto backend : {conformance::Backend::cpu, conformance::Backend::gpu}) {
+    const conformance::Measure m = conformance::identity_at_radius_zero(backend, &context(), *c.method, c.options);
+    EXPECT_LE(m.value, m.bound) << conformance::to_string(backend);
   }
 }
 
@@ -149,21 +124,9 @@ TEST_P(Conformance, RadiusZeroIsTheIdentity) {
 TEST_P(Conformance, UniformImageStaysUniformAwayFromTheBorders) {
   const Config c = GetParam();
   skip_if_device_lacks(*c.method, c.options);
-  const int w = 80, h = 64, margin = 2 * static_cast<int>(c.options.pattern.max_radius_px()) + 2;
-  Image color(w, h, 3);
-  for (std::size_t p = 0; p < color.pixel_count(); ++p)
-    for (int ch = 0; ch < 3; ++ch) color.pixels[p * 3 + ch] = 1.0f + ch;
-  const Image depth(w, h, 1, 10.0f);
-  const Lens lens = with_aperture(with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2), c);
-  const double bound = (c.method->storage_tolerance(c.options) + 1e-5) * max_abs(color);
-  for (const bool gpu : {false, true}) {
-    const Image out = gpu ? run_gpu(context(), *c.method, color, depth, lens, c.options)
-                          : run_cpu(*c.method, color, depth, lens, c.options, 2);
-    double worst = 0;
-    for (int y = margin; y < h - margin; ++y)
-      for (int x = margin; x < w - margin; ++x)
-        for (int ch = 0; ch < 3; ++ch) worst = std::max(worst, std::abs(double(out.px(x, y)[ch]) - (1.0 + ch)));
-    EXPECT_LE(worst, bound) << (gpu ? "GPU" : "CPU");
+  for (const auto backend : {conformance::Backend::cpu, conformance::Backend::gpu}) {
+    const conformance::Measure m = conformance::uniform_stays_uniform(backend, &context(), *c.method, c.options);
+    EXPECT_LE(m.value, m.bound) << conformance::to_string(backend);
   }
 }
 
@@ -173,16 +136,10 @@ TEST_P(EnergyConservation, EnergyIsConservedAwayFromTheBorders) {
   const Config c = GetParam();
   skip_if_device_lacks(*c.method, c.options);
   // Every pixel behind the focus at the largest radius; light only inside a margin of twice it.
-  const int w = 80, h = 64, margin = 2 * static_cast<int>(c.options.pattern.max_radius_px()) + 2;
-  const Image color = random_image_in_black_border(w, h, margin, 7);
-  const Image depth(w, h, 1, 10.0f);
-  const Lens lens = with_aperture(with_max_coc_radius(Lens{}, depth, c.options.pattern.max_radius_px() * 2), c);
-  const double in = rgb_sum(color);
-  const double bound = c.method->storage_tolerance(c.options) * max_abs(color) * color.pixels.size() / in + 1e-5;
-  for (const bool gpu : {false, true}) {
-    const Image out = gpu ? run_gpu(context(), *c.method, color, depth, lens, c.options)
-                          : run_cpu(*c.method, color, depth, lens, c.options, 2);
-    EXPECT_NEAR(rgb_sum(out) / in, 1.0, bound) << (gpu ? "GPU" : "CPU") << ": " << c.method->energy_note;
+  for (const auto backend : {conformance::Backend::cpu, conformance::Backend::gpu}) {
+    const conformance::Measure m = conformance::energy_conserved(backend, &context(), *c.method, c.options);
+    EXPECT_LE(m.value, m.bound) << conformance::to_string(backend) << ": |sum(out) / sum(in) - 1|; "
+                                << c.method->energy_note;
   }
 }
 
