@@ -14,14 +14,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
 #include <memory>
 #include <optional>
 #include <regex>
-#include <sstream>
 #include <stdexcept>
 #include <tuple>
 
@@ -37,6 +35,7 @@
 #include "report.hpp"
 #include "run.hpp"
 #include "scene.hpp"
+#include "text_file.hpp"
 
 extern char** environ;
 
@@ -123,13 +122,6 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-std::string read_whole(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // Runs argv with `env_overrides` set (the rest of the environment inherited), its stdout and stderr
 // into `output_path`; returns its exit status (128 + signal when killed).
 int run_child(const std::vector<std::string>& args, const std::map<std::string, std::string>& env_overrides,
@@ -197,6 +189,13 @@ class Checker {
     return *ctx_;
   }
 
+  // The scene's lens at the pattern's largest radius, drawing the method's aperture.
+  Lens lens_for(const Scene& s) const {
+    Lens lens = with_max_coc_radius(s.lens, s.depth_m, options_.pattern.max_radius_px());
+    lens.aperture = options_.aperture;
+    return lens;
+  }
+
   void skip_if_unsupported(int width_px, int height_px) {
     if (const std::string why = method_.unsupported ? method_.unsupported(options_, width_px, height_px) : "";
         !why.empty())
@@ -244,8 +243,7 @@ class Checker {
   Outcome bad_input(const std::string& which) {
     skip_if_unsupported(kFrameW, kFrameH);
     Scene s = make_scene("hoops", kFrameW, kFrameH);
-    Lens lens = with_max_coc_radius(s.lens, s.depth_m, options_.pattern.max_radius_px());
-    lens.aperture = options_.aperture;
+    const Lens lens = lens_for(s);
     const int x = kFrameW / 2, y = kFrameH / 2;
     if (which == "nan_color") s.color.px(x, y)[1] = std::numeric_limits<float>::quiet_NaN();
     if (which == "inf_color") s.color.px(x, y)[1] = std::numeric_limits<float>::infinity();
@@ -293,8 +291,7 @@ class Checker {
     if (const std::string missing = ctx.unmet(wanted); !missing.empty())
       throw Skip{fmt::format("{} lacks {}", ctx.info().name, missing)};
     const Scene s = make_scene("hoops", kFrameW, kFrameH);
-    Lens lens = with_max_coc_radius(s.lens, s.depth_m, options_.pattern.max_radius_px());
-    lens.aperture = options_.aperture;
+    const Lens lens = lens_for(s);
     const Image out = run_gpu(ctx, method_, s.color, s.depth_m, lens, options_);
     const std::size_t bad = non_finite_values(out);
     return {bad == 0 ? Status::pass : Status::fail,
@@ -342,7 +339,8 @@ class Checker {
                               {"VK_LAYER_SETTINGS_PATH", dir.path().string()},
                               {"VK_LOADER_DEBUG", "layer"}},
                              output);
-    const std::string text = read_whole(output), messages = std::filesystem::exists(log) ? read_whole(log) : "";
+    const std::string text = read_text_file(output.string(), "validation run's output"),
+                      messages = std::filesystem::exists(log) ? read_text_file(log.string(), "validation layer log") : "";
     // The loader says when it inserted the layer; without that line nothing was validated.
     if (text.find("Insert instance layer \"VK_LAYER_KHRONOS_validation\"") == std::string::npos)
       return {Status::fail, fmt::format("the loader did not insert VK_LAYER_KHRONOS_validation (exit {}): nothing was "
@@ -388,8 +386,7 @@ class Checker {
     vk::Context& ctx = gpu();
     const MemoryUse declared = method_.gpu_memory(options_, w, h, &ctx);
     const Scene s = make_scene("hoops", w, h);
-    Lens lens = with_max_coc_radius(s.lens, s.depth_m, options_.pattern.max_radius_px());
-    lens.aperture = options_.aperture;
+    const Lens lens = lens_for(s);
     gpu::GpuFrame frame(ctx, s.color, s.depth_m, lens, options_.pattern);
     const std::uint64_t allocated = method_.make_gpu(frame, options_)->intermediate_bytes();
     const auto most = static_cast<std::uint64_t>(static_cast<double>(declared.bytes) * kMemorySlackRatio) + kMemorySlackBytes;

@@ -2,11 +2,9 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -82,9 +80,9 @@ fs::path cache_dir() {
 }
 
 std::vector<std::uint32_t> read_cached(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return {};
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return {};
+  const std::string bytes = read_text_file(file.string(), "SPIR-V cache entry");
   if (bytes.size() < 20 || bytes.size() % 4 != 0) return {};
   std::vector<std::uint32_t> words(bytes.size() / 4);
   std::memcpy(words.data(), bytes.data(), bytes.size());
