@@ -67,34 +67,6 @@ void append_builds(const compare::Report& report, const AbOptions& o) {
   }
 }
 
-// Two method packages (two versions of one's own shader), or a package and a built-in: this binary
-// serves the sweep over both in one worker process, the two alternating sample by sample (paired.hpp).
-void use_packages(AbOptions& o) {
-  const auto& builtins = registered_methods();
-  for (const std::string* given : {&o.baseline, &o.candidate})
-    if (!is_package_reference(*given) &&
-        std::none_of(builtins.begin(), builtins.end(), [&](const Method& m) { return m.name == *given; }))
-      throw std::invalid_argument(fmt::format("ab compares two builds, or a method package with another or with a "
-                                              "built-in method: '{}' is neither a package (a folder holding {}) nor "
-                                              "a built-in's name, while the other is a package", *given, kPackageManifest));
-  const Method* side[2] = {&find_method(o.baseline), &find_method(o.candidate)};
-  if (side[0] == side[1])
-    throw std::invalid_argument(fmt::format("ab: '{}' and '{}' are the same package; for an A/A check compare it with a "
-                                            "copy of its folder", o.baseline, o.candidate));
-  for (const auto& word : o.run.sweep)
-    if (word.rfind("--method", 0) == 0)
-      throw std::invalid_argument("ab of two packages: --sweep must not name methods (the two packages are its methods)");
-  o.run.baseline_exe = o.run.candidate_exe = std::filesystem::canonical("/proc/self/exe").string();
-  o.run.sweep.insert(o.run.sweep.end(), {"--methods", o.baseline, o.candidate});
-  for (int k = 0; k < 2; ++k) {
-    o.run.package_methods.push_back(side[k]->name);
-    o.run.labels[k] = side[k]->package.is_null()
-                          ? fmt::format("built-in method {}", side[k]->name)
-                          : fmt::format("package {} ({}, content hash {})", side[k]->name,
-                                        side[k]->package["path"].get<std::string>(), side[k]->package["hash"].get<std::string>());
-  }
-}
-
 void run_ab(AbOptions& o) {
   // Before any measuring: a file that cannot be written fails now, not after the pairs (and never after a verdict).
   if (!o.json_out.empty()) check_writable_file(o.json_out);
@@ -103,7 +75,7 @@ void run_ab(AbOptions& o) {
   if (packages && o.sweep == AbOptions{}.sweep) o.sweep = "figure9 --quick";
   o.run.sweep = paired::sweep_words(o.sweep);
   if (packages) {
-    use_packages(o);
+    paired::use_packages(o.run, o.baseline, o.candidate);
   } else {
     o.run.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
     o.run.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");

@@ -1,6 +1,7 @@
 // `bokehbench selftest-compare`: measures CI's regression check itself on this machine. It runs
-// `bokehbench ab` (paired, as .ci/regression does) repeatedly between two builds of the same code,
-// interleaving the conditions, and counts:
+// `bokehbench ab` (paired, as .ci/regression does) repeatedly between two builds of the same code (or
+// two copies of one method package, as a user's CI compares its shader), interleaving the conditions,
+// and counts:
 //   false alarms   A/A runs (no change) that fail, and points found slower
 //   detection      runs with a known slowdown of every point, or of one point (a different one each
 //                  run), injected into the candidate's times, that fail, and whether the slowed
@@ -18,6 +19,7 @@
 
 #include "commands.hpp"
 #include "compare.hpp"
+#include "package.hpp"
 #include "paired.hpp"
 #include "report.hpp"
 #include "runner.hpp"
@@ -48,9 +50,14 @@ void selftest(const SelftestOptions& o) {
     conditions.push_back({fmt::format("one_{:g}", pct), pct, true});
   }
   paired::Options base;
-  base.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
-  base.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
-  base.sweep = paired::sweep_words(o.sweep);
+  const bool packages = is_package_reference(o.baseline) || is_package_reference(o.candidate);
+  base.sweep = paired::sweep_words(packages && o.sweep == SelftestOptions{}.sweep ? "figure9 --quick" : o.sweep);
+  if (packages) {
+    paired::use_packages(base, o.baseline, o.candidate);  // two versions of one's shader, in one process
+  } else {
+    base.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
+    base.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
+  }
   base.rule.threshold = o.threshold_pct / 100;
   base.progress = false;
 
@@ -153,8 +160,8 @@ void selftest(const SelftestOptions& o) {
                             {"how", "per point, (1 + threshold) / (5th percentile of its A/A interval lows) - 1: the "
                                     "slowdown whose first-pass interval clears the threshold in 95% of runs"}};
 
-  nlohmann::json doc = {{"sweep", o.sweep},
-                        {"design", "paired: bokehbench ab between two builds of the same code (A/A), with a known "
+  nlohmann::json doc = {{"sweep", fmt::format("{}", fmt::join(base.sweep, " "))},
+                        {"design", "paired: bokehbench ab between two builds of the same code or two copies of one package (A/A), with a known "
                                    "slowdown injected into the candidate's times (every point, or one point per run)"},
                         {"threshold_pct", o.threshold_pct},
                         {"baseline", base.baseline_exe},
@@ -188,8 +195,12 @@ void add_selftest_compare_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("selftest-compare",
                                  "Measure CI's regression check (bokehbench ab) on this machine: false alarms over A/A "
                                  "runs, detection of slowdowns injected into every point or one point");
-  cmd->add_option("--baseline", o->baseline, "Build folder (or bokehbench) of the baseline")->capture_default_str();
-  cmd->add_option("--candidate", o->candidate, "Build folder (or bokehbench) of the candidate")->capture_default_str();
+  cmd->add_option("--baseline", o->baseline,
+                  "Build folder (or bokehbench) of the baseline, or a method package (then --candidate is one too, "
+                  "or a built-in's name, and --sweep names no methods)")
+      ->capture_default_str();
+  cmd->add_option("--candidate", o->candidate, "Build folder (or bokehbench) of the candidate, or a method package")
+      ->capture_default_str();
   cmd->add_option("--runs", o->runs, "A/A runs")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--injected-runs", o->injected_runs, "Runs of each injected condition")
       ->check(CLI::Range(0, 1000))

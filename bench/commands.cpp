@@ -274,6 +274,13 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
   cmd->add_flag("--run-over-budget", run_over_budget,
                 "Run points whose single frame is estimated to take longer than --budget-s (by default they are "
                 "skipped before anything runs, with the estimate: their taps at a ceiling rate)");
+  cmd->add_option("--watchdog-s", watchdog_s,
+                  "A GPU submission running longer than this plus 20x its estimate (the warm-up's corner scaled to "
+                  "the frame) is a runaway: its point is skipped naming the pass, and so are the GPU points after it, "
+                  "since the device cannot be stopped (0: wait as long as it takes)")
+      ->check(finite_number())
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--device", device, "Vulkan device index or name part (default: a GPU if present, else lavapipe)");
   cmd->add_option("--seed", seed, "Seed of the shuffled measuring order")->capture_default_str();
   cmd->add_option("--out-dir", out_dir, "Where the results files go")->capture_default_str();
@@ -324,6 +331,7 @@ SweepSettings SweepFlags::settings(const std::string& name, const std::string& p
   s.cpu_threads = cpu_threads;
   s.max_buffer_mb = max_buffer_mb;
   s.frame_budget_s = run_over_budget ? 0.0 : budget_s;
+  s.watchdog_s = watchdog_s;
   s.plot = plot;
   s.policy.budget_s = budget_s;
   s.policy.sample_min_ms = sample_ms;

@@ -89,6 +89,7 @@ struct SweepFlags {
   int inject_slowdown_pct = 0;  // a test of `compare` only (selftest-compare); 0: off
   bool plot = true;
   bool serve = false;  // a worker of `bokehbench ab` (paired.hpp)
+  double watchdog_s = 60;        // --watchdog-s: SweepSettings::watchdog_s
   bool run_over_budget = false;  // run points whose one frame is estimated above the budget
   std::string shard = "1/1";     // --shard i/n (parse_shard)
   std::string store;             // --store URL; empty: <out_dir>/history.sqlite

@@ -26,6 +26,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "method.hpp"
+#include "package.hpp"
 #include "report.hpp"
 #include "targets.hpp"
 
@@ -53,6 +55,7 @@ void serve(const std::vector<SweepPoint>& points, const SweepSettings& s) {
 
   SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb);
   vk::Context* ctx = targets.context();
+  if (ctx) ctx->watchdog_floor_s = s.watchdog_s;
   json hello_points = json::array();
   for (std::size_t i = 0; i < points.size(); ++i)
     hello_points.push_back({{"id", points[i].id},
@@ -137,6 +140,34 @@ std::string bokehbench_in(const std::string& given, const std::string& role) {
     throw std::invalid_argument(fmt::format("{} '{}' is neither a build folder nor a bokehbench binary (for commits, "
                                             "use bench/ab)", role, given));
   return std::filesystem::absolute(p).string();
+}
+
+// Two method packages (two versions of one's own shader), or a package and a built-in: this binary
+// serves the sweep over both in one worker process, the two alternating sample by sample (paired.hpp).
+void use_packages(Options& o, const std::string& baseline, const std::string& candidate) {
+  const auto& builtins = registered_methods();
+  for (const std::string* given : {&baseline, &candidate})
+    if (!is_package_reference(*given) &&
+        std::none_of(builtins.begin(), builtins.end(), [&](const Method& m) { return m.name == *given; }))
+      throw std::invalid_argument(fmt::format("ab compares two builds, or a method package with another or with a "
+                                              "built-in method: '{}' is neither a package (a folder holding {}) nor "
+                                              "a built-in's name, while the other is a package", *given, kPackageManifest));
+  const Method* side[2] = {&find_method(baseline), &find_method(candidate)};
+  if (side[0] == side[1])
+    throw std::invalid_argument(fmt::format("ab: '{}' and '{}' are the same package; for an A/A check compare it with a "
+                                            "copy of its folder", baseline, candidate));
+  for (const auto& word : o.sweep)
+    if (word.rfind("--method", 0) == 0)
+      throw std::invalid_argument("ab of two packages: --sweep must not name methods (the two packages are its methods)");
+  o.baseline_exe = o.candidate_exe = std::filesystem::canonical("/proc/self/exe").string();
+  o.sweep.insert(o.sweep.end(), {"--methods", baseline, candidate});
+  for (int k = 0; k < 2; ++k) {
+    o.package_methods.push_back(side[k]->name);
+    o.labels[k] = side[k]->package.is_null()
+                          ? fmt::format("built-in method {}", side[k]->name)
+                          : fmt::format("package {} ({}, content hash {})", side[k]->name,
+                                        side[k]->package["path"].get<std::string>(), side[k]->package["hash"].get<std::string>());
+  }
 }
 
 std::vector<std::string> sweep_words(const std::string& command_line) {

@@ -59,6 +59,10 @@ struct Options {
 // The bokehbench to run for `given`: a build folder holding one, or a binary (absolute path). Throws
 // std::invalid_argument naming `role` and what is wrong.
 std::string bokehbench_in(const std::string& given, const std::string& role);
+// Two method packages (two versions of one's own shader), or a package and a built-in: this binary
+// serves the sweep (o.sweep, which must not name methods) over both in one worker process, the two
+// alternating sample by sample; sets the executables, the methods and the report's labels.
+void use_packages(Options& o, const std::string& baseline, const std::string& candidate);
 // A sweep command line ("figure9 --quick") as the words a worker is started with.
 std::vector<std::string> sweep_words(const std::string& command_line);
 

@@ -257,15 +257,21 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     record.round_order.push_back(order);
     const auto probes_start = std::chrono::steady_clock::now();
     for (auto& [name, probe] : hooks.probes) {
-      if (round == 0) {
-        PointRecord warm;
-        probe_frames[name] = frames_for(warm_up(*probe, policy, warm), policy);
-      } else {
-        lead_in(*probe, record.probe_ms[name].back(), policy);
+      if (!probe) continue;
+      try {
+        if (round == 0) {
+          PointRecord warm;
+          probe_frames[name] = frames_for(warm_up(*probe, policy, warm), policy);
+        } else {
+          lead_in(*probe, record.probe_ms[name].back(), policy);
+        }
+        const Sample s = timed(*probe, probe_frames[name], probe_frames[name]);
+        record.probe_ms[name].push_back(s.frame_ms);
+        record.probe_cpu_ms[name].push_back(s.cpu_ms);
+      } catch (const std::exception& e) {  // its device gone (a runaway submission): the rounds go on without it
+        fmt::print(stderr, "warning: probe {} stopped after {} rounds: {}\n", name, record.probe_ms[name].size(), e.what());
+        probe.reset();
       }
-      const Sample s = timed(*probe, probe_frames[name], probe_frames[name]);
-      record.probe_ms[name].push_back(s.frame_ms);
-      record.probe_cpu_ms[name].push_back(s.cpu_ms);
     }
     const double probes_s = seconds_since(probes_start);
     for (std::size_t i : order) {

@@ -662,6 +662,7 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   const SweepFiles files(s.out_dir, s.name);
   SweepTargets targets(points, s.device, s.cpu_threads, s.max_buffer_mb, s.frame_budget_s);
   vk::Context* ctx = targets.context();
+  if (ctx) ctx->watchdog_floor_s = s.watchdog_s;
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
   nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
   runner::Policy policy = s.policy;
@@ -696,7 +697,14 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
       // What the filter allocated for this scene (bytes above is the model, which budgets use).
       info[i].memory["allocated_bytes"] = g->intermediate_bytes();
       info[i].stats = g->stats();
-      info[i].error = accuracy.error(i, g->output());
+      const Image output = g->output();
+      // A built-in's non-finite values are a finding (an f16 overflow), counted with the error; a
+      // package's are a fault of the package: its point is skipped, saying so.
+      if (const std::size_t bad = count_non_finite(output); bad > 0 && !points[i].method->package.is_null())
+        throw std::runtime_error(fmt::format("package {} wrote {} non-finite values (NaN or infinite) of {} in its "
+                                             "output: a package's output must be finite",
+                                             points[i].method->name, bad, output.pixels.size()));
+      info[i].error = accuracy.error(i, output);
     }
     if (auto* c = dynamic_cast<CpuTarget*>(&t)) {
       info[i].stats = c->stats();

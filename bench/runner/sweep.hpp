@@ -90,6 +90,10 @@ struct SweepSettings {
   // commands set it to --budget-s unless --run-over-budget).
   double frame_budget_s = 0;
   int cpu_threads = 0;       // 0: every core
+  // A GPU submission running past this + 20x its warm-up's estimate is stopped as a runaway: that
+  // point is skipped naming the pass, and the GPU points after it too (the device cannot be
+  // stopped); 0: no watchdog.
+  double watchdog_s = 60;
   bool plot = true;
   // Answer a paired comparison's requests on stdin instead of running the rounds (paired.hpp).
   bool serve = false;

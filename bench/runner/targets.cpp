@@ -16,9 +16,17 @@ namespace bokeh {
 GpuTarget::GpuTarget(vk::Context& ctx, const Method& m, const Scene& scene, const Lens& lens, const FilterOptions& o)
     : frame_(ctx, scene.color, scene.depth_m, lens, o.pattern), filter_(m.make_gpu(frame_, o)), timer_(ctx) {}
 
-void GpuTarget::warm_up() { gpu::warm_up(frame_, *filter_, timer_); }
+void GpuTarget::warm_up() {
+  gpu::warm_up(frame_, *filter_, timer_);  // lavapipe compiles each pipeline here, at its first use
+  const auto start = std::chrono::steady_clock::now();
+  gpu::warm_up(frame_, *filter_, timer_);
+  const double corner_px = std::min(frame_.width(), 16u) * std::min(frame_.height(), 16u);
+  frame_estimate_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() *
+                      frame_.width() * frame_.height() / corner_px;
+}
 
 runner::Sample GpuTarget::measure(int frames) {
+  frame_.ctx.watchdog_expected_s = frames * frame_estimate_s_;
   timer_.reserve(static_cast<std::uint32_t>(frames * passes_ + 2));
   const auto passes = gpu::run_frames(frame_, *filter_, timer_, frames);
   passes_ = static_cast<int>(passes.size());
@@ -32,6 +40,7 @@ std::uint64_t GpuTarget::resident_bytes() const {
 }
 
 std::vector<vk::PassTime> GpuTarget::counted_frame() {
+  frame_.ctx.watchdog_expected_s = frame_estimate_s_;
   timer_.count_invocations(true);
   auto passes = gpu::run_frames(frame_, *filter_, timer_, 1);
   timer_.count_invocations(false);

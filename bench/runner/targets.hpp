@@ -37,6 +37,7 @@ class GpuTarget final : public runner::Target {
   std::unique_ptr<gpu::GpuFilter> filter_;
   vk::TimestampQueries timer_;
   int passes_ = 16;
+  double frame_estimate_s_ = 0;  // the warm-up's corner scaled to the frame: what the watchdog expects
 };
 
 // A method's CPU reference: wall clock of whole frames, CoC pass included.

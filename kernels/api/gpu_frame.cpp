@@ -3,6 +3,9 @@
 #include <algorithm>
 
 #include <cstdint>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "vk/spirv.hpp"
 
@@ -85,15 +88,23 @@ Image GpuFrame::read_packed() {
 }
 
 std::vector<vk::PassTime> run_frames(GpuFrame& frame, GpuFilter& filter, vk::TimestampQueries& timer, int frames) {
-  frame.ctx.submit_and_wait([&](VkCommandBuffer cmd) {
-    timer.begin_frame(cmd);
-    for (int f = 0; f < frames; ++f) {
-      frame.coc_pass.dispatch(cmd, &frame.params, frame.width(), frame.height());
-      timer.end_pass(cmd, "coc");
-      filter.record(cmd, timer);
-    }
-    timer.end_frame(cmd);
-  });
+  try {
+    frame.ctx.submit_and_wait([&](VkCommandBuffer cmd) {
+      timer.begin_frame(cmd);
+      for (int f = 0; f < frames; ++f) {
+        frame.coc_pass.dispatch(cmd, &frame.params, frame.width(), frame.height());
+        timer.end_pass(cmd, "coc");
+        filter.record(cmd, timer);
+      }
+      timer.end_frame(cmd);
+    });
+  } catch (const vk::RunawaySubmission& e) {
+    const std::string pass = filter.running_pass();
+    throw std::runtime_error(fmt::format("{} of {} frame{} at {}x{} {}; the device still runs it, so no GPU work "
+                                         "after it can run in this process",
+                                         pass.empty() ? "a pass" : "pass '" + pass + "'", frames, frames == 1 ? "" : "s",
+                                         frame.params.width_px, frame.params.height_px, e.what()));
+  }
   return vk::mean_per_frame(timer.read(), frames);
 }
 

@@ -73,6 +73,10 @@ class GpuFilter {
   // What the last frame found where it depends on the scene (e.g. sprite counts and overflow), read
   // back after the frames, outside the timed region: an object, empty when there is nothing to report.
   virtual nlohmann::json stats() { return nlohmann::json::object(); }
+  // While a submission runs: the pass it is in, where the filter marks its progress in host memory
+  // (method packages do; "" : unknown). Timestamp queries cannot say: lavapipe answers them only
+  // once the submission ends, and a runaway one never does.
+  virtual std::string running_pass() const { return ""; }
 };
 
 // Runs CoC + filter `frames` times in one timed submission (a batch long enough to swamp launch

@@ -92,6 +92,8 @@ std::string plan_frame(vk::Context* ctx, const Method& m, const FilterOptions& o
   // Host images every run holds: colour (12 B/px), depth (4), CoC radius (4), packed input (16), output (12).
   plan.host_bytes = pixels * 48;
   if (std::string why = m.unsupported ? m.unsupported(o, w, h) : ""; !why.empty()) return why;
+  if (!ctx && !m.cpu_reference)
+    return fmt::format("{} has no CPU reference (a GPU-only method package): it runs on the GPU only", m.name);
   if (ctx) {
     if (std::string missing = ctx->unmet(m.needs(o)); !missing.empty())
       return fmt::format("{} needs {}, which {} lacks", m.name, missing, ctx->info().name);

@@ -1,10 +1,12 @@
 #include "glsl_runtime.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -151,6 +153,26 @@ std::vector<std::uint32_t> compile_compute_shader(const fs::path& folder, const 
     }
   }
   return in_process[key] = spirv;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> descriptor_bindings(const std::vector<std::uint32_t>& spirv) {
+  constexpr std::uint32_t kOpDecorate = 71, kBinding = 33, kDescriptorSet = 34, kHeaderWords = 5;
+  std::map<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>> by_id;  // id -> (set, binding)
+  std::set<std::uint32_t> bound;
+  for (std::size_t at = kHeaderWords; at < spirv.size();) {
+    const std::uint32_t words = spirv[at] >> 16, opcode = spirv[at] & 0xffff;
+    if (words == 0 || at + words > spirv.size()) break;  // malformed: glslang's output never is
+    if (opcode == kOpDecorate && words >= 4) {
+      const std::uint32_t id = spirv[at + 1], decoration = spirv[at + 2], value = spirv[at + 3];
+      if (decoration == kDescriptorSet) by_id[id].first = value;
+      if (decoration == kBinding) by_id[id].second = value, bound.insert(id);
+    }
+    at += words;
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+  for (std::uint32_t id : bound) out.push_back(by_id[id]);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace bokeh::package

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace bokeh::package {
@@ -16,6 +17,10 @@ namespace bokeh::package {
 // skipped). Throws std::invalid_argument with glslang's messages, each naming the file and line.
 std::vector<std::uint32_t> compile_compute_shader(const std::filesystem::path& folder, const std::string& file,
                                                   std::uint64_t source_hash);
+
+// The (descriptor set, binding) pairs the SPIR-V's resources are decorated with, from its
+// OpDecorate instructions: what a shader binds, checked against what its manifest declares.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> descriptor_bindings(const std::vector<std::uint32_t>& spirv);
 
 // A hash of the embedded shader library (part of every package shader's source hash).
 std::uint64_t shader_library_hash();

@@ -218,16 +218,22 @@ class PackageGpu final : public gpu::GpuFilter {
     }
   }
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
+    mark_progress(cmd, 0);
     signed_coc_.dispatch(cmd);
     timer.end_pass(cmd, "prepare");
     // The grid follows the frame's size as it is now (warm_up records a 16 x 16 corner).
     const Variables v = variables_of(*pkg_, options_, frame_.params.width_px, frame_.params.height_px);
     for (std::size_t k = 0; k < pipelines_.size(); ++k) {
       const PassDecl& pass = pkg_->passes[k];
+      mark_progress(cmd, static_cast<std::uint32_t>(k + 1));
       pipelines_[k].dispatch(cmd, &frame_.params, static_cast<std::uint32_t>(pass.invocations[0].count(v)),
                              static_cast<std::uint32_t>(pass.invocations[1].count(v)));
       timer.end_pass(cmd, pass.name);
     }
+  }
+  std::string running_pass() const override {
+    const auto k = *static_cast<const volatile std::uint32_t*>(progress_.mapped());
+    return k == 0 ? "prepare" : k <= pkg_->passes.size() ? pkg_->passes[k - 1].name : "";
   }
   std::uint64_t intermediate_bytes() const override {
     std::uint64_t bytes = signed_coc_.buffer.allocated_bytes();
@@ -239,7 +245,12 @@ class PackageGpu final : public gpu::GpuFilter {
   gpu::GpuFrame& frame_;
   std::shared_ptr<const Package> pkg_;
   FilterOptions options_;
+  // The pass about to run, written by the device in command order: what running_pass() reads
+  // when a submission runs past the watchdog (a package's shader may loop without end).
+  void mark_progress(VkCommandBuffer cmd, std::uint32_t pass) { vkCmdFillBuffer(cmd, progress_.get(), 0, 4, pass); }
+
   gpu::SignedCocPass signed_coc_;
+  vk::Buffer progress_{frame_.ctx, 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::Buffer::Where::host};
   std::vector<vk::Buffer> buffers_;
   std::deque<vk::ComputePipeline> pipelines_;
 };
@@ -384,15 +395,29 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
     if (!fs::is_regular_file(folder / pass.shader))
       throw std::invalid_argument(fmt::format("{}: passes '{}': shader '{}' is not a file in the package", file, pass.name, pass.shader));
     pass.spirv = package::compile_compute_shader(folder, pass.shader, source_hash);
+    const std::uint32_t declared = kFixedBindings + static_cast<std::uint32_t>(pkg->buffers.size());
+    for (const auto& [set, binding] : package::descriptor_bindings(pass.spirv))
+      if (set != 0 || binding >= declared)
+        throw std::invalid_argument(fmt::format(
+            "{}: passes '{}': {} binds set {} binding {}, which the manifest does not declare (set 0: bindings 0-4 "
+            "are the harness's, {})",
+            file, pass.name, pass.shader, set, binding,
+            pkg->buffers.empty() ? std::string("and the manifest declares no buffers")
+                                 : fmt::format("5-{} the manifest's buffers in order", declared - 1)));
   }
 
   m.package = {{"name", pkg->name}, {"hash", fmt::format("{:016x}", pkg->hash)}, {"path", pkg->path}};
   if (!rev.empty()) m.package["rev"] = rev;
 
   std::shared_ptr<const Package> shared = pkg;
-  m.unsupported = [shared](const FilterOptions& o, int w, int h) -> std::string {
+  m.unsupported = [shared, file](const FilterOptions& o, int w, int h) -> std::string {
     try {
-      variables_of(*shared, o, w, h);
+      const Variables v = variables_of(*shared, o, w, h);
+      for (std::size_t i = 0; i < shared->buffers.size(); ++i)
+        if (v.at(shared->buffers[i].name + "_bytes") <= 0)
+          return fmt::format("{}: buffers[{}] ('{}'): elements '{}' is 0 at {}x{}, N = {}: a buffer needs at least one",
+                             file, i, shared->buffers[i].name, shared->buffers[i].elements.text(), w, h,
+                             o.pattern.size_n);
     } catch (const std::invalid_argument& e) {
       return e.what();
     }
@@ -410,13 +435,17 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
       work.push_back({pass.name, value(pass.taps), value(pass.bytes_read), value(pass.bytes_written)});
     return work;
   };
-  m.gpu_memory = [shared](const FilterOptions& o, int w, int h, vk::Context*) {
+  m.gpu_memory = [shared](const FilterOptions& o, int w, int h, vk::Context* ctx) {
     const Variables v = variables_of(*shared, o, w, h);
     MemoryUse use;
     use.bytes = static_cast<std::uint64_t>(w) * h * 16;
     use.details["signed_coc_bytes"] = use.bytes;
     for (const auto& b : shared->buffers) {
       const auto bytes = static_cast<std::uint64_t>(v.at(b.name + "_bytes"));
+      if (ctx && bytes > ctx->info().max_storage_buffer_range_bytes)
+        throw std::invalid_argument(fmt::format("buffer '{}' needs {} bytes at {}x{}, over {}'s maxStorageBufferRange of {}",
+                                                b.name, bytes, w, h, ctx->info().name,
+                                                ctx->info().max_storage_buffer_range_bytes));
       use.bytes += bytes;
       use.details[b.name + "_bytes"] = bytes;
     }

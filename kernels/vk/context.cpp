@@ -236,10 +236,13 @@ Context::Context(const std::string& selector, const DeviceRequirements& wanted) 
 }
 
 Context::~Context() {
-  if (device_.get() != VK_NULL_HANDLE) vkDeviceWaitIdle(device_);
+  if (device_.get() != VK_NULL_HANDLE && !device_abandoned()) vkDeviceWaitIdle(device_);
 }
 
 void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record) {
+  if (device_abandoned())
+    throw std::runtime_error("the device is still running an earlier submission that ran past the watchdog; nothing "
+                             "more can run on it in this process");
   VK_CHECK(vkResetCommandPool(device_, command_pool_, 0));  // its one buffer: cheaper than a per-buffer reset
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -252,7 +255,18 @@ void Context::submit_and_wait(const std::function<void(VkCommandBuffer)>& record
   VkFence fence = fence_;
   VK_CHECK(vkResetFences(device_, 1, &fence));
   VK_CHECK(vkQueueSubmit(queue_, 1, &submit, fence));
-  VK_CHECK(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
+  if (!(watchdog_floor_s > 0)) {
+    VK_CHECK(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
+    return;
+  }
+  const double limit_s = watchdog_floor_s + 20 * std::max(0.0, watchdog_expected_s);
+  const VkResult waited = vkWaitForFences(device_, 1, &fence, VK_TRUE, static_cast<std::uint64_t>(limit_s * 1e9));
+  if (waited == VK_TIMEOUT) {
+    device_abandoned() = true;
+    throw RunawaySubmission(fmt::format("ran past the watchdog of {:.3g} s ({:g} s, plus 20x the {:.3g} s expected)",
+                                        limit_s, watchdog_floor_s, watchdog_expected_s));
+  }
+  VK_CHECK(waited);
 }
 
 std::string Context::unmet(const DeviceRequirements& wanted) const { return unmet_by(physical_, wanted); }

@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,11 @@ struct DeviceRequirements {
 struct PipelineObjects;  // pipeline_objects.hpp: layouts and pipeline shared by equal pipelines
 class MemoryBlocks;      // memory.cpp: the blocks small allocations share
 
+// A submission that ran past the watchdog: the device still runs it (handle.hpp, device_abandoned).
+struct RunawaySubmission : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 class Context {
  public:
   // selector: "" picks the best device (discrete > integrated > virtual > cpu) among those meeting
@@ -67,7 +73,11 @@ class Context {
 
   // Records with `record`, submits, and waits: lavapipe runs dispatches synchronously anyway, and
   // a benchmark wants each frame finished before it reads the timestamps.
+  // With watchdog_floor_s > 0 the wait is bounded: a submission running past watchdog_floor_s +
+  // 20 x watchdog_expected_s throws RunawaySubmission, and the device is abandoned (handle.hpp).
   void submit_and_wait(const std::function<void(VkCommandBuffer)>& record);
+  double watchdog_floor_s = 0;     // 0: wait as long as it takes
+  double watchdog_expected_s = 0;  // what the caller expects the next submission to take
 
   // What of `wanted` this device lacks, in words ("" when it has everything).
   std::string unmet(const DeviceRequirements& wanted) const;

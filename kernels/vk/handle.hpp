@@ -1,9 +1,18 @@
 #pragma once
 // Move-only owner of a Vulkan handle: destroys it with the function given at construction.
+#include <atomic>
 #include <functional>
 #include <utility>
 
 namespace bokeh::vk {
+
+// Set when a submission ran past the watchdog (Context::watchdog_floor_s): the device is still
+// executing it and cannot be stopped, so nothing it may touch is freed (freeing would crash the
+// process that is writing the finished results) and the process ends with std::_Exit (bench/main).
+inline std::atomic<bool>& device_abandoned() {
+  static std::atomic<bool> abandoned{false};
+  return abandoned;
+}
 
 template <class T>
 class Handle {
@@ -24,7 +33,7 @@ class Handle {
   ~Handle() { reset(); }
 
   void reset() {
-    if (handle_ != T{} && destroy_) destroy_(handle_);
+    if (handle_ != T{} && destroy_ && !device_abandoned()) destroy_(handle_);
     handle_ = T{};
   }
   T get() const { return handle_; }

@@ -1,0 +1,14 @@
+#version 450
+// A test package's pass that writes NaN (0 / 0) where the input is (tests/package_faults_test.py).
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+
+layout(std430, binding = 2) readonly buffer SignedCoc { vec4 signed_coc[]; };
+layout(std430, binding = 4) writeonly buffer Out { vec4 result[]; };
+
+void main() {
+  const ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (outside(p)) return;
+  const float zero = signed_coc[index_of(p)].a * 0.0;
+  result[index_of(p)] = vec4(zero / zero);
+}
