@@ -25,6 +25,12 @@ Metric parse_metric(const std::string& text) {
 
 const char* metric_name(Metric metric) { return metric == Metric::wall ? "wall ms per frame" : "CPU ms per frame"; }
 
+namespace {
+// What a value of a series is: the harness's commit, and the package's version where the point is a
+// package's (an edit of the package at the same commit is a value of its own).
+std::string version_of(const SeriesValue& r) { return r.commit + '\n' + r.package; }
+}  // namespace
+
 std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metric metric) {
   std::vector<CommitValue> out;
   std::vector<std::vector<double>> pooled;
@@ -32,9 +38,9 @@ std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metr
   for (const auto& r : runs) {
     const auto& samples = metric == Metric::wall ? r.samples_ms : r.samples_cpu_ms;
     if (samples.empty()) continue;
-    auto [it, added] = index.emplace(r.commit, out.size());
+    auto [it, added] = index.emplace(version_of(r), out.size());
     if (added) {
-      out.push_back({r.commit, r.date_utc});
+      out.push_back({r.commit, r.date_utc, r.package});
       pooled.emplace_back();
     }
     CommitValue& c = out[it->second];
@@ -51,16 +57,18 @@ std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metr
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> ends;
   std::map<std::string, bool> all_have;
   for (const auto& r : runs) {
-    auto [it, added] = all_have.emplace(r.commit, true);
+    auto [it, added] = all_have.emplace(version_of(r), true);
     it->second = it->second && r.has_interval;
-    ends[r.commit].first.push_back(r.q1_ms), ends[r.commit].second.push_back(r.q3_ms);
+    ends[version_of(r)].first.push_back(r.q1_ms), ends[version_of(r)].second.push_back(r.q3_ms);
   }
-  for (auto& c : out)
-    if (all_have[c.commit]) {
+  for (auto& c : out) {
+    const std::string key = c.commit + '\n' + c.package;
+    if (all_have[key]) {
       c.has_interval = true;
-      c.q1_ms = quantile_of(ends[c.commit].first, 0.5);
-      c.q3_ms = quantile_of(ends[c.commit].second, 0.5);
+      c.q1_ms = quantile_of(ends[key].first, 0.5);
+      c.q3_ms = quantile_of(ends[key].second, 0.5);
     }
+  }
   return out;
 }
 

@@ -16,8 +16,11 @@ const char* metric_name(Metric metric);
 // One commit's value: the median over its runs' samples pooled, with their quartiles. A headline
 // figure's: the median of its runs' values, and of their intervals' ends (q1_ms, q3_ms) when every run
 // gave one (has_interval), else the values' quartiles.
+// A commit's runs (of one method package's version, where the point is a package's: an edit of the
+// package is a new value at the same commit).
 struct CommitValue {
   std::string commit, date_utc;  // date: of its first run
+  std::string package;           // the package's content hash ("": a built-in method)
   double median_ms = 0, q1_ms = 0, q3_ms = 0;
   int runs = 0, samples = 0;
   bool has_interval = false;

@@ -235,15 +235,16 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
                                          "use a newer bokehbench (nothing was changed in the store)",
                                          url_, *version, kStoreSchemaVersion));
   if (!version && !create) throw std::runtime_error(fmt::format("'{}' is not a bokehbench results store (no meta table)", url_));
-  auto has_headlines = [&] {
-    return !(c.kind() == "sqlite"
-                 ? c.query("SELECT name FROM sqlite_master WHERE type = 'table' AND name = 'headlines'")
-                 : c.query("SELECT table_name FROM information_schema.tables WHERE table_name = 'headlines'"))
+  auto has_table = [&](const std::string& name) {
+    return !(c.kind() == "sqlite" ? c.query("SELECT name FROM sqlite_master WHERE type = 'table' AND name = $1", {name})
+                                  : c.query("SELECT table_name FROM information_schema.tables WHERE table_name = $1", {name}))
                 .empty();
   };
-  has_headlines_ = version && has_headlines();
-  // Reading a store written before headline figures were stored: it has none (nothing is changed in it).
-  if (has_headlines_ || (version && !create)) return;
+  has_headlines_ = version && has_table("headlines");
+  has_packages_ = version && has_table("point_packages");
+  // Reading a store written before headline figures (or packages) were stored: it has none (nothing
+  // is changed in it).
+  if ((has_headlines_ && has_packages_) || (version && !create)) return;
   c.begin_write();
   try {
     // PostgreSQL: shards starting at once on an empty database create the tables once.
@@ -268,8 +269,11 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
     c.query("CREATE TABLE IF NOT EXISTS headlines (run_id BIGINT NOT NULL REFERENCES runs(id), name TEXT NOT NULL, "
             "unit TEXT NOT NULL, value DOUBLE PRECISION NOT NULL, low DOUBLE PRECISION NOT NULL, "
             "high DOUBLE PRECISION NOT NULL, has_interval INTEGER NOT NULL, PRIMARY KEY (run_id, name))");
+    // Likewise: a method package's content hash per point, so a series follows the package's edits.
+    c.query("CREATE TABLE IF NOT EXISTS point_packages (run_id BIGINT NOT NULL REFERENCES runs(id), point_id TEXT NOT "
+            "NULL, package TEXT NOT NULL, PRIMARY KEY (run_id, point_id))");
     c.commit();
-    has_headlines_ = true;
+    has_headlines_ = has_packages_ = true;
   } catch (...) {
     c.rollback();
     throw;
@@ -279,6 +283,8 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
 std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& points, const std::vector<HeadlineRow>& headlines) {
   if (!headlines.empty() && !has_headlines_)
     throw std::logic_error("results store opened for reading only: it cannot take headline figures");
+  if (!has_packages_ && std::any_of(points.begin(), points.end(), [](const PointRow& p) { return !p.package.empty(); }))
+    throw std::logic_error("results store opened for reading only: it cannot take method packages' hashes");
   Connection& c = *connection_;
   c.begin_write();
   try {
@@ -294,6 +300,8 @@ std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& point
                p.settled ? "1" : "0"});
       c.query("INSERT INTO samples (run_id, point_id, frame_ms, cpu_ms) VALUES ($1, $2, $3, $4)",
               {id, p.point_id, join(p.samples_ms), join(p.samples_cpu_ms)});
+      if (!p.package.empty())
+        c.query("INSERT INTO point_packages (run_id, point_id, package) VALUES ($1, $2, $3)", {id, p.point_id, p.package});
     }
     for (const auto& h : headlines)
       c.query("INSERT INTO headlines (run_id, name, unit, value, low, high, has_interval) VALUES ($1, $2, $3, $4, $5, $6, $7)",
@@ -403,6 +411,13 @@ std::vector<SeriesValue> Store::series(const std::string& point_id) {
     v.sweep = text(r[11]);
     out.push_back(std::move(v));
   }
+  if (has_packages_) {
+    std::map<std::int64_t, std::string> package_of_run;
+    for (const auto& r : connection_->query("SELECT run_id, package FROM point_packages WHERE point_id = $1", {point_id}))
+      package_of_run[std::stoll(text(r[0]))] = text(r[1]);
+    for (auto& v : out)
+      if (const auto it = package_of_run.find(v.run_id); it != package_of_run.end()) v.package = it->second;
+  }
   return out;
 }
 
@@ -469,6 +484,7 @@ std::vector<PointRow> points_of(const nlohmann::json& doc) {
       row.q3_ms = p["frame_ms"].value("q3", 0.0);
     }
     row.settled = p.value("settled", false);
+    if (p.contains("package") && p["package"].is_object()) row.package = p["package"].value("hash", "");
     if (p.contains("samples_ms")) row.samples_ms = p["samples_ms"].get<std::vector<double>>();
     if (p.contains("samples_cpu_ms")) row.samples_cpu_ms = p["samples_cpu_ms"].get<std::vector<double>>();
     if (!row.samples_cpu_ms.empty()) {

@@ -39,6 +39,7 @@ struct PointRow {
   double cpu_median_ms = 0;                    // process CPU time per frame (0 when not recorded)
   bool settled = false;
   std::vector<double> samples_ms, samples_cpu_ms;
+  std::string package;  // a method package's content hash ("": a built-in method)
 };
 
 // A run's headline figure: what a person reads of the run (figure9's naive/FLAG ratio at one N and its
@@ -62,6 +63,7 @@ struct SeriesValue {
   double median_ms = 0, q1_ms = 0, q3_ms = 0, cpu_median_ms = 0;
   std::vector<double> samples_ms, samples_cpu_ms;
   bool has_interval = false;  // headline figures: q1_ms and q3_ms are the run's interval
+  std::string package;        // a method package's content hash at this run ("": a built-in method)
 };
 
 // A store's connection: the SQL both back-ends run. Rows come back as text (NULL as nullopt).
@@ -111,6 +113,7 @@ class Store {
   std::unique_ptr<Connection> connection_;
   std::string url_, path_;  // path_: SQLite's file
   bool has_headlines_ = false;  // a store written before headline figures were stored lacks the table
+  bool has_packages_ = false;   // likewise the point_packages table (method packages' content hashes)
 };
 
 // What identifies the machine a run was measured on: device, driver, CPU model and cores,

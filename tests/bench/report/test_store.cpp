@@ -426,6 +426,30 @@ TEST_P(StoreTest, SeriesOverCommitsFindTheStepAndSkipInterruptedRuns) {
   EXPECT_NE(html.find("+20.0% at c07"), std::string::npos);
 }
 
+// A method package's point: its content hash is stored per point, and an edit of the package at the
+// same harness commit is a value of its own in the series, in order, each with its hash.
+TEST_P(StoreTest, APackagesEditsAreValuesOfTheirOwnAtOneCommit) {
+  auto store = Store::open(url_, true);
+  const auto package_points = [](const std::string& hash, double ms) {
+    PointRow p{"my_dof/gpu/x", "my_dof", "gpu", ms, ms, ms, 0, true, {ms, ms, ms}, {}, hash};
+    return std::vector<PointRow>{p};
+  };
+  store->append(a_run("c1", "2026-01-01T00:00:00Z"), package_points("aaaa", 10));
+  store->append(a_run("c1", "2026-01-01T00:01:00Z"), package_points("aaaa", 10.2));
+  store->append(a_run("c1", "2026-01-01T00:02:00Z"), package_points("bbbb", 12));
+  const auto all = series(*store, "my_dof/gpu/x", Metric::wall, {});
+  ASSERT_EQ(all.size(), 1u);
+  ASSERT_EQ(all[0].values.size(), 2u);
+  EXPECT_EQ(all[0].values[0].package, "aaaa");
+  EXPECT_EQ(all[0].values[0].runs, 2);
+  EXPECT_EQ(all[0].values[1].package, "bbbb");
+  EXPECT_DOUBLE_EQ(all[0].values[1].median_ms, 12);
+  // Read from a results document: the point's package object.
+  const nlohmann::json doc = {{"points", {{{"id", "my_dof/gpu/x"}, {"method", "my_dof"}, {"backend", "gpu"},
+                                           {"package", {{"name", "my_dof"}, {"hash", "cccc"}, {"path", "/x"}}}}}}};
+  EXPECT_EQ(points_of(doc).at(0).package, "cccc");
+}
+
 TEST_P(StoreTest, AFailedAppendLeavesNothing) {
   auto store = Store::open(url_, true);
   store->append(a_run("c1", "2026-01-01T00:00:00Z"), two_points(1));

@@ -96,6 +96,9 @@ void print_series(const HistoryOptions& o) {
       for (const auto& st : s.steps)
         if (st.index == i)
           fmt::print("  ---- change point: {:+.1f}% (p {:.3f}) ----\n", (st.ratio - 1) * 100, st.p_value);
+      if (i > 0 && v.package != s.values[i - 1].package)
+        fmt::print("  ---- the method package changed: content hash {} -> {} ----\n",
+                   s.values[i - 1].package.empty() ? "none" : s.values[i - 1].package, v.package.empty() ? "none" : v.package);
       fmt::print("  {:<14}  {:<20}  {:>12.4f}  {:>10.4f} - {:<10.4f}  {:>4}\n", v.commit.substr(0, 14), v.date_utc, v.median_ms,
                  v.q1_ms, v.q3_ms, v.runs);
     }
