@@ -1,6 +1,6 @@
 #pragma once
 // The conformance measurements one method is held to, shared by the GoogleTest suite over the registry
-// (tests/conformance/test_conformance.cpp) and `bokehbench check METHOD` (cmd_check.cpp): each builds
+// (tests/conformance/test_conformance.cpp) and `bokehbench check METHOD` (bench/commands/check.cpp): each builds
 // its small frame, runs the method on the CPU reference or the GPU, and returns what it measured with
 // the bound the method's own declarations (method.hpp) give it. Neither decides pass or fail here.
 #include <string>

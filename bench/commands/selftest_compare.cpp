@@ -33,6 +33,8 @@ struct SelftestOptions {
   int runs = 20, injected_runs = 5;
   std::vector<double> slowdowns_pct = {10, 25};
   double threshold_pct = 5;  // what .ci/regression uses
+  int max_pairs = paired::Options{}.max_pairs;
+  double budget_s = paired::Options{}.budget_s;
   std::string sweep = "figure9 --quick --methods all";
   std::string out = "results/selftest_compare.json";
 };
@@ -59,6 +61,8 @@ void selftest(const SelftestOptions& o) {
     base.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
   }
   base.rule.threshold = o.threshold_pct / 100;
+  base.max_pairs = o.max_pairs;
+  base.budget_s = o.budget_s;
   base.progress = false;
 
   std::vector<std::string> ids;  // the compared points, from the first run
@@ -161,6 +165,8 @@ void selftest(const SelftestOptions& o) {
                                     "slowdown whose first-pass interval clears the threshold in 95% of runs"}};
 
   nlohmann::json doc = {{"sweep", fmt::format("{}", fmt::join(base.sweep, " "))},
+                        {"max_pairs", o.max_pairs},
+                        {"budget_s", o.budget_s},
                         {"design", "paired: bokehbench ab between two builds of the same code or two copies of one package (A/A), with a known "
                                    "slowdown injected into the candidate's times (every point, or one point per run)"},
                         {"threshold_pct", o.threshold_pct},
@@ -212,6 +218,12 @@ void add_selftest_compare_command(CLI::App& app) {
       ->check(CLI::Range(0.1, 1000.0))
       ->capture_default_str();
   cmd->add_option("--sweep", o->sweep, "The sweep, as .ci/regression runs it")->capture_default_str();
+  cmd->add_option("--max-pairs", o->max_pairs, "Pairs after which a point stops (ab's --max-pairs)")
+      ->check(CLI::Range(2, 10000))
+      ->capture_default_str();
+  cmd->add_option("--budget-s", o->budget_s, "Measuring time each run aims for (ab's --budget-s)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--out", o->out, "The summary JSON")->capture_default_str();
   cmd->callback([o] { selftest(*o); });
 }

@@ -374,6 +374,115 @@ std::string range_text(const nlohmann::json& r) {
   return r["low"] == r["high"] ? head(r["low"]) : head(r["low"]) + ".." + head(r["high"]);
 }
 
+// One method x precision x backend over every case: outcomes, safe ranges per axis, first failure
+// (printed as one line of the table).
+nlohmann::json stability_of(const SweepPoint& point, const std::vector<Case>& cases, vk::Context* ctx, int threads) {
+  const Method* m = point.method;
+  const std::string& precision = point.options.precision;
+  const std::string& backend = point.backend;
+  const FilterOptions& base = point.options;
+  vk::Context* device = backend == "gpu" ? ctx : nullptr;
+  nlohmann::json config = {{"method", m->name}, {"precision", precision}, {"backend", backend}};
+  const double limit = m->input_limit ? m->input_limit(base) : static_cast<double>(kFloatMax);
+  config["input_limit"] = limit;
+  if (device)
+    if (std::string missing = device->unmet(m->needs(base)); !missing.empty()) {
+      config["skipped"] = fmt::format("{} needs {}, which {} lacks", m->name, missing, device->info().name);
+      fmt::print("  {:<12} {:<18} {:<4} skipped: {}\n", m->name, precision, backend, config["skipped"].get<std::string>());
+      return config;
+    }
+  config["skipped"] = nullptr;
+  std::vector<Outcome> outcomes(cases.size());
+  // The I = 1 outputs first: the linearity reference of each intensity axis.
+  std::map<std::string, Image> unit;
+  for (std::size_t i = 0; i < cases.size(); ++i)
+    if (cases[i].check_linearity && cases[i].nominal) {
+      outcomes[i] = run_case(cases[i], *m, base, device, threads, nullptr);
+      unit[cases[i].axis] = outcomes[i].output;
+    }
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    if (cases[i].check_linearity && cases[i].nominal) continue;
+    const auto u = unit.find(cases[i].axis);
+    outcomes[i] = run_case(cases[i], *m, base, device, threads,
+                           u != unit.end() && !u->second.pixels.empty() ? &u->second : nullptr);
+  }
+  nlohmann::json case_json = nlohmann::json::array(), ranges = nlohmann::json::object();
+  nlohmann::json first_failure = nullptr;
+  bool limit_holds = true;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const Case& c = cases[i];
+    const Outcome& out = outcomes[i];
+    case_json.push_back({{"axis", c.axis},
+                         {"label", c.label},
+                         {"value", value_json(c.value)},
+                         {"nominal", c.nominal},
+                         {"width_px", c.width_px},
+                         {"height_px", c.height_px},
+                         {"N", c.pattern.size_n},
+                         {"k", c.pattern.spacing_px},
+                         {"status", out.status},
+                         {"kind", out.kind.empty() ? nlohmann::json(nullptr) : nlohmann::json(out.kind)},
+                         {"detail", out.detail},
+                         {"disc_ok", out.disc_ok ? nlohmann::json(*out.disc_ok) : nlohmann::json(nullptr)},
+                         {"disc_detail", out.disc_detail},
+                         {"measured", out.measured},
+                         {"bounds", out.bounds}});
+    if (out.status == "fail" && first_failure.is_null())
+      first_failure = {{"axis", c.axis}, {"label", c.label}, {"kind", out.kind}, {"detail", out.detail}};
+    // The declared input limit: no overflow or saturation at or below it.
+    if (c.axis.rfind("intensity", 0) == 0 && c.intensity <= limit &&
+        (out.kind == "nan" || out.kind == "inf" || out.kind == "saturation"))
+      limit_holds = false;
+  }
+  for (const auto& axis : kAxes) {
+    std::vector<const Case*> axis_cases;
+    std::vector<const Outcome*> axis_outcomes;
+    for (std::size_t i = 0; i < cases.size(); ++i)
+      if (cases[i].axis == axis) axis_cases.push_back(&cases[i]), axis_outcomes.push_back(&outcomes[i]);
+    ranges[axis] = safe_range_json(axis_cases, axis_outcomes);
+    if (axis == "radius") ranges["disc"] = safe_range_json(axis_cases, axis_outcomes, /*disc=*/true);
+  }
+  config["input_limit_holds"] = limit_holds;
+  config["cases"] = case_json;
+  config["safe_ranges"] = ranges;
+  config["first_failure"] = first_failure;
+  std::string line = fmt::format("  {:<12} {:<18} {:<4}", m->name, precision, backend);
+  for (const auto& axis : kAxes) line += fmt::format(" {:<16}", range_text(ranges[axis]));
+  line += fmt::format(" {:<10}", range_text(ranges["disc"]));
+  fmt::print("{} {}\n", line,
+             first_failure.is_null()
+                 ? std::string("no failure")
+                 : fmt::format("first failure: {} {} ({})", first_failure["axis"].get<std::string>(),
+                               first_failure["label"].get<std::string>(), first_failure["kind"].get<std::string>()));
+  std::fflush(stdout);
+  return config;
+}
+
+// What each check of a case holds a method to (the results' "checks" block).
+nlohmann::json stability_checks() {
+  return {{"point_light", "one light of intensity I at the centre of a black frame of constant depth: every pixel has "
+                          "the CoC radius of equation (1) at that depth (double precision), clamped to the pattern's "
+                          "largest radius; truth = exact_scatter (energy_sum) of the light at that radius"},
+          {"finite", "no NaN or Inf value (kinds nan, inf)"},
+          {"energy", "|sum(output) / sum(exact) - 1| <= 2 storage_tolerance + 1e-4 (kinds saturation when energy is lost "
+                     "above I = 1, underflow below it, energy otherwise); storage_tolerance bounds each value relative "
+                     "to the largest, so bracketed formats, whose rounding follows a row's or channel's range, can "
+                     "exceed it over a large disc"},
+          {"disc", "the light's rms distance from the centre within 15% + 0.5 px of the exact disc's (disc_ok): the "
+                   "method's design (a kernel's ripple, a Gaussian) rather than its numerics, so it has its own range "
+                   "(safe_ranges.disc, radius axis) and does not count as a failure"},
+          {"linearity", "intensity axes: max |output / I - output at I = 1| <= (2 storage_tolerance + 1e-4) x the latter's "
+                        "peak (kinds saturation above I = 1, underflow below; 1e-4: f32 rounding amplified by kernels "
+                        "with large cancelling weights)"},
+          {"uniform", "width axis: every pixel 1, radius 4 px: pixels farther than 1.5 x 4 + 1 px from the border stay "
+                      "1 within 2 storage_tolerance + 1e-5 (kind energy)"},
+          {"rejected", "bad input refused with a clear error, as it should be (depth inf)"},
+          {"safe_range", "per axis, the contiguous passing cases around the nominal one (radius 4, I = 1, the focus "
+                         "distance, 64 px), with the first failure each side"},
+          {"input_limit", "Method::input_limit (f32's largest value when undeclared); input_limit_holds: no nan, inf "
+                          "or saturation on the intensity axes at or below it"}};
+}
+
 void stability(StabilityOptions& o) {
   o.axes.resolve();
   const auto start = std::chrono::steady_clock::now();
@@ -396,88 +505,8 @@ void stability(StabilityOptions& o) {
              fmt::join(o.axes.backends, " "), ctx ? ctx->info().name : "none");
 
   nlohmann::json configurations = nlohmann::json::array();
-  for (const SweepPoint& point : configurations_to_run) {
-    const Method* m = point.method;
-    const std::string& precision = point.options.precision;
-    const std::string& backend = point.backend;
-    const FilterOptions& base = point.options;
-    vk::Context* device = backend == "gpu" ? &*ctx : nullptr;
-    nlohmann::json config = {{"method", m->name}, {"precision", precision}, {"backend", backend}};
-    const double limit = m->input_limit ? m->input_limit(base) : static_cast<double>(kFloatMax);
-    config["input_limit"] = limit;
-    if (device)
-      if (std::string missing = device->unmet(m->needs(base)); !missing.empty()) {
-        config["skipped"] = fmt::format("{} needs {}, which {} lacks", m->name, missing, device->info().name);
-        fmt::print("  {:<12} {:<18} {:<4} skipped: {}\n", m->name, precision, backend, config["skipped"].get<std::string>());
-        configurations.push_back(config);
-        continue;
-      }
-    config["skipped"] = nullptr;
-    std::vector<Outcome> outcomes(cases.size());
-    // The I = 1 outputs first: the linearity reference of each intensity axis.
-    std::map<std::string, Image> unit;
-    for (std::size_t i = 0; i < cases.size(); ++i)
-      if (cases[i].check_linearity && cases[i].nominal) {
-        outcomes[i] = run_case(cases[i], *m, base, device, threads, nullptr);
-        unit[cases[i].axis] = outcomes[i].output;
-      }
-    for (std::size_t i = 0; i < cases.size(); ++i) {
-      if (cases[i].check_linearity && cases[i].nominal) continue;
-      const auto u = unit.find(cases[i].axis);
-      outcomes[i] = run_case(cases[i], *m, base, device, threads,
-                             u != unit.end() && !u->second.pixels.empty() ? &u->second : nullptr);
-    }
-    nlohmann::json case_json = nlohmann::json::array(), ranges = nlohmann::json::object();
-    nlohmann::json first_failure = nullptr;
-    bool limit_holds = true;
-    for (std::size_t i = 0; i < cases.size(); ++i) {
-      const Case& c = cases[i];
-      const Outcome& out = outcomes[i];
-      case_json.push_back({{"axis", c.axis},
-                           {"label", c.label},
-                           {"value", value_json(c.value)},
-                           {"nominal", c.nominal},
-                           {"width_px", c.width_px},
-                           {"height_px", c.height_px},
-                           {"N", c.pattern.size_n},
-                           {"k", c.pattern.spacing_px},
-                           {"status", out.status},
-                           {"kind", out.kind.empty() ? nlohmann::json(nullptr) : nlohmann::json(out.kind)},
-                           {"detail", out.detail},
-                           {"disc_ok", out.disc_ok ? nlohmann::json(*out.disc_ok) : nlohmann::json(nullptr)},
-                           {"disc_detail", out.disc_detail},
-                           {"measured", out.measured},
-                           {"bounds", out.bounds}});
-      if (out.status == "fail" && first_failure.is_null())
-        first_failure = {{"axis", c.axis}, {"label", c.label}, {"kind", out.kind}, {"detail", out.detail}};
-      // The declared input limit: no overflow or saturation at or below it.
-      if (c.axis.rfind("intensity", 0) == 0 && c.intensity <= limit &&
-          (out.kind == "nan" || out.kind == "inf" || out.kind == "saturation"))
-        limit_holds = false;
-    }
-    for (const auto& axis : kAxes) {
-      std::vector<const Case*> axis_cases;
-      std::vector<const Outcome*> axis_outcomes;
-      for (std::size_t i = 0; i < cases.size(); ++i)
-        if (cases[i].axis == axis) axis_cases.push_back(&cases[i]), axis_outcomes.push_back(&outcomes[i]);
-      ranges[axis] = safe_range_json(axis_cases, axis_outcomes);
-      if (axis == "radius") ranges["disc"] = safe_range_json(axis_cases, axis_outcomes, /*disc=*/true);
-    }
-    config["input_limit_holds"] = limit_holds;
-    config["cases"] = case_json;
-    config["safe_ranges"] = ranges;
-    config["first_failure"] = first_failure;
-    std::string line = fmt::format("  {:<12} {:<18} {:<4}", m->name, precision, backend);
-    for (const auto& axis : kAxes) line += fmt::format(" {:<16}", range_text(ranges[axis]));
-    line += fmt::format(" {:<10}", range_text(ranges["disc"]));
-    fmt::print("{} {}\n", line,
-               first_failure.is_null()
-                   ? std::string("no failure")
-                   : fmt::format("first failure: {} {} ({})", first_failure["axis"].get<std::string>(),
-                                 first_failure["label"].get<std::string>(), first_failure["kind"].get<std::string>()));
-    std::fflush(stdout);
-    configurations.push_back(config);
-  }
+  for (const SweepPoint& point : configurations_to_run)
+    configurations.push_back(stability_of(point, cases, ctx ? &*ctx : nullptr, threads));
 
   nlohmann::json axes = nlohmann::json::object();
   for (const auto& axis : kAxes) {
@@ -488,28 +517,7 @@ void stability(StabilityOptions& o) {
   const nlohmann::json body = {
       {"config", {{"quick", o.quick}, {"backends", o.axes.backends}, {"methods", o.axes.methods}}},
       {"axes", axes},
-      {"checks",
-       {{"point_light", "one light of intensity I at the centre of a black frame of constant depth: every pixel has "
-                        "the CoC radius of equation (1) at that depth (double precision), clamped to the pattern's "
-                        "largest radius; truth = exact_scatter (energy_sum) of the light at that radius"},
-        {"finite", "no NaN or Inf value (kinds nan, inf)"},
-        {"energy", "|sum(output) / sum(exact) - 1| <= 2 storage_tolerance + 1e-4 (kinds saturation when energy is lost "
-                   "above I = 1, underflow below it, energy otherwise); storage_tolerance bounds each value relative "
-                   "to the largest, so bracketed formats, whose rounding follows a row's or channel's range, can "
-                   "exceed it over a large disc"},
-        {"disc", "the light's rms distance from the centre within 15% + 0.5 px of the exact disc's (disc_ok): the "
-                 "method's design (a kernel's ripple, a Gaussian) rather than its numerics, so it has its own range "
-                 "(safe_ranges.disc, radius axis) and does not count as a failure"},
-        {"linearity", "intensity axes: max |output / I - output at I = 1| <= (2 storage_tolerance + 1e-4) x the latter's "
-                      "peak (kinds saturation above I = 1, underflow below; 1e-4: f32 rounding amplified by kernels "
-                      "with large cancelling weights)"},
-        {"uniform", "width axis: every pixel 1, radius 4 px: pixels farther than 1.5 x 4 + 1 px from the border stay "
-                    "1 within 2 storage_tolerance + 1e-5 (kind energy)"},
-        {"rejected", "bad input refused with a clear error, as it should be (depth inf)"},
-        {"safe_range", "per axis, the contiguous passing cases around the nominal one (radius 4, I = 1, the focus "
-                       "distance, 64 px), with the first failure each side"},
-        {"input_limit", "Method::input_limit (f32's largest value when undeclared); input_limit_holds: no nan, inf "
-                        "or saturation on the intensity axes at or below it"}}},
+      {"checks", stability_checks()},
       {"configurations", configurations},
       {"elapsed_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};
   const nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);

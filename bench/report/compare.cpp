@@ -492,17 +492,10 @@ int Report::exit_code() const {
   return kNoRegression;
 }
 
-Report compare_results(const json& baseline_doc, const json& current_doc, const Options& options,
-                       const std::string& baseline_path, const std::string& current_path) {
-  if (!(options.rule.threshold >= 0)) throw std::invalid_argument("the threshold must be >= 0");
-  if (!(options.rule.confidence > 0 && options.rule.confidence < 1))
-    throw std::invalid_argument("the confidence must be between 0 and 1");
-  Report report;
-  report.baseline_path = baseline_path;
-  report.current_path = current_path;
-  report.options = options;
-  const File base{baseline_doc, baseline_path}, cur{current_doc, current_path};
+namespace {
 
+// Both files of the same results schema, in the version this reads (else mismatches).
+void check_schemas(const File& base, const File& cur, Report& report) {
   // What kind of file: both the same results schema, in the version this reads.
   const std::string base_schema = base.get(base.doc, "schema", "", json::value_t::string).get<std::string>();
   const std::string cur_schema = cur.get(cur.doc, "schema", "", json::value_t::string).get<std::string>();
@@ -514,8 +507,10 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
     report.mismatches.push_back(fmt::format("schema_version: baseline {}, current {} (compare reads version 2: samples "
                                             "per round with the calibration probes)",
                                             base_version.dump(), cur_version.dump()));
-  if (!report.mismatches.empty()) return report;
+}
 
+// The machines, commits, statuses and configurations of the two files: information, never a verdict.
+void note_machines(const File& base, const File& cur, Report& report) {
   // The device: timings of two devices are not a regression.
   const json& base_ctx = base.get(base.doc, "context", "", json::value_t::object);
   const json& cur_ctx = cur.get(cur.doc, "context", "", json::value_t::object);
@@ -557,8 +552,11 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
     for (const auto& line : json_differences(base_config, cur_config)) report.notes.push_back("config " + line);
   }
 
-  // The method set and the points.
-  const auto base_points = points_of(base), cur_points = points_of(cur);
+}
+
+// The methods and points of the two files: any that only one has, or that one skipped, is a mismatch.
+void match_points(const std::map<std::string, Measured>& base_points, const std::map<std::string, Measured>& cur_points,
+                  Report& report) {
   std::set<std::string> base_methods, cur_methods;
   for (const auto& [id, m] : base_points) base_methods.insert(m.method);
   for (const auto& [id, m] : cur_points) cur_methods.insert(m.method);
@@ -587,7 +585,11 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
     if (b.point && !c.point) report.mismatches.push_back(fmt::format("{}: measured in baseline, skipped in current ({})", id, c.skipped_reason));
     if (!b.point && c.point) report.mismatches.push_back(fmt::format("{}: skipped in baseline ({}), measured in current", id, b.skipped_reason));
   }
-  // The clock: CPU time where the device is the CPU and both files recorded it, else wall.
+}
+
+// The clock compared: CPU time where the device is the CPU and both files recorded it, else wall.
+void choose_clock(const File& base, const File& cur, const Options& options, Report& report) {
+  const json base_dev = base.doc.at("context").value("device", json(nullptr));
   if (options.times != "auto" && options.times != "wall" && options.times != "cpu")
     throw std::invalid_argument("--times is auto, wall or cpu, not '" + options.times + "'");
   const bool cpu_device = is_cpu_device(base_dev);
@@ -602,7 +604,11 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
   if (report.clock == "cpu" && !cpu_device)
     report.notes.push_back("CPU time on a GPU measures host overhead, not the GPU's work");
 
-  // The points both measured, in the baseline's order.
+}
+
+// One comparison per point both measured, in the baseline's order.
+void compare_points(const File& base, const File& cur, const std::map<std::string, Measured>& cur_points,
+                    const Options& options, Report& report) {
   std::map<std::string, std::vector<double>> base_probe_cache, cur_probe_cache;
   for (const json& bp : base.doc["points"]) {
     const std::string id = bp["id"].get<std::string>();
@@ -631,7 +637,10 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
     report.points.push_back(std::move(pc));
   }
 
-  // The machine factor the normalisation takes out, probe by probe.
+}
+
+// The machine factor the normalisation takes out, probe by probe (a note).
+void note_machine_factor(const File& base, const File& cur, const Options& options, Report& report) {
   if (options.normalise != "none") {
     const json& bprobes = base.doc["measurement"]["probes"];
     const json& cprobes = cur.doc["measurement"].value("probes", json::object());
@@ -653,6 +662,28 @@ Report compare_results(const json& baseline_doc, const json& current_doc, const 
                                          "of work, current / baseline): {}",
                                          report.clock, fmt::join(factors, ", ")));
   }
+}
+
+}  // namespace
+
+Report compare_results(const json& baseline_doc, const json& current_doc, const Options& options,
+                       const std::string& baseline_path, const std::string& current_path) {
+  if (!(options.rule.threshold >= 0)) throw std::invalid_argument("the threshold must be >= 0");
+  if (!(options.rule.confidence > 0 && options.rule.confidence < 1))
+    throw std::invalid_argument("the confidence must be between 0 and 1");
+  Report report;
+  report.baseline_path = baseline_path;
+  report.current_path = current_path;
+  report.options = options;
+  const File base{baseline_doc, baseline_path}, cur{current_doc, current_path};
+  check_schemas(base, cur, report);
+  if (!report.mismatches.empty()) return report;
+  note_machines(base, cur, report);
+  const auto base_points = points_of(base), cur_points = points_of(cur);
+  match_points(base_points, cur_points, report);
+  choose_clock(base, cur, options, report);
+  compare_points(base, cur, cur_points, options, report);
+  note_machine_factor(base, cur, options, report);
   return report;
 }
 

@@ -202,11 +202,140 @@ std::vector<std::size_t> round_order(const std::vector<std::size_t>& active, con
 
 }  // namespace
 
+namespace {
+
+// The prepared targets a run keeps, by point * replicas + replica, freeing the least recently
+// visited when their resident memory passes the policy's limit.
+class LiveTargets {
+ public:
+  LiveTargets(const Policy& policy, Hooks& hooks) : policy_(policy), hooks_(hooks), replicas_(static_cast<std::size_t>(policy.replicas)) {}
+
+  // The target of the point's next sample (its replicas in turn), prepared and warmed when not live.
+  Target& for_sample(std::size_t i, PointRecord& rec) {
+    const std::size_t key = i * replicas_ + rec.samples.size() % replicas_;
+    auto it = live_.find(key);
+    if (it == live_.end()) {
+      auto target = hooks_.prepare(i);
+      ++rec.preparations;
+      it = live_.emplace(key, std::move(target)).first;
+      if (rec.frames_per_sample == 0) {
+        rec.frames_per_sample = point_frames(warm_up(*it->second, policy_, rec), policy_);
+        if (hooks_.first_ready) hooks_.first_ready(i, *it->second);
+      } else {
+        // Another replica, or freed earlier to save memory: compile caches are warm already; one
+        // untimed frame takes the first touch of its fresh memory out of the samples.
+        it->second->warm_up();
+        it->second->measure(1);
+      }
+      make_room(key);
+    }
+    recency_.remove(key);
+    recency_.push_back(key);
+    return *it->second;
+  }
+  void drop(std::size_t i) {
+    for (std::size_t r = 0; r < replicas_; ++r) drop_key(i * replicas_ + r);
+  }
+
+ private:
+  void drop_key(std::size_t key) {
+    live_.erase(key);
+    recency_.remove(key);
+  }
+  void make_room(std::size_t keep) {
+    const auto resident = [&] {
+      std::uint64_t sum = 0;
+      for (const auto& [i, t] : live_) sum += t->resident_bytes();
+      return sum;
+    };
+    while (resident() > policy_.resident_limit_bytes && live_.size() > 1) {
+      const auto victim = std::find_if(recency_.begin(), recency_.end(), [&](std::size_t i) { return i != keep; });
+      if (victim == recency_.end()) break;
+      drop_key(*victim);
+    }
+  }
+
+  const Policy& policy_;
+  Hooks& hooks_;
+  std::size_t replicas_;
+  std::map<std::size_t, std::unique_ptr<Target>> live_;
+  std::list<std::size_t> recency_;  // least recently visited first
+};
+
+// One sample of each probe, at the start of a round (its frame count fixed in round 0).
+void probe_round(Hooks& hooks, const Policy& policy, int round, std::map<std::string, int>& probe_frames,
+                 RunRecord& record) {
+  for (auto& [name, probe] : hooks.probes) {
+    if (!probe) continue;
+    try {
+      if (round == 0) {
+        PointRecord warm;
+        probe_frames[name] = frames_for(warm_up(*probe, policy, warm), policy);
+      } else {
+        lead_in(*probe, record.probe_ms[name].back(), policy);
+      }
+      const Sample s = timed(*probe, probe_frames[name], probe_frames[name]);
+      record.probe_ms[name].push_back(s.frame_ms);
+      record.probe_cpu_ms[name].push_back(s.cpu_ms);
+    } catch (const std::exception& e) {  // its device gone (a runaway submission): the rounds go on without it
+      fmt::print(stderr, "warning: probe {} stopped after {} rounds: {}\n", name, record.probe_ms[name].size(), e.what());
+      probe.reset();
+    }
+  }
+}
+
+// One timed sample of a point (after its lead-in), the extra frames' time spread over those reported.
+void take_sample(Target& target, PointRecord& rec, const Policy& policy, int round) {
+  lead_in(target, rec.samples.empty() ? rec.warm_up_ms.back() : rec.samples.back().frame_ms, policy);
+  const int frames = rec.frames_per_sample, extra = extra_frames(frames, policy);
+  Sample sample = timed(target, frames + extra, frames);
+  if (extra > 0) {
+    const double scale = static_cast<double>(frames + extra) / frames;
+    sample.frame_ms *= scale;
+    for (auto& [pass, ms] : sample.pass_ms) ms *= scale;
+  }
+  rec.samples.push_back(std::move(sample));
+  rec.sample_round.push_back(round);
+}
+
+// After a round: the points still measuring, without those settled on their own and (once every
+// point has its minimum samples) those the headlines no longer need.
+std::vector<std::size_t> still_active(const std::vector<std::size_t>& active, const Policy& policy, Hooks& hooks,
+                                      RunRecord& record, LiveTargets& live) {
+  const bool by_headlines = static_cast<bool>(hooks.points_needed);
+  std::vector<std::size_t> still;
+  for (std::size_t i : active) {
+    PointRecord& rec = record.points[i];
+    if (!rec.skipped.empty()) continue;
+    rec.settled = settled(rec, policy, by_headlines);
+    if (rec.settled) live.drop(i); else still.push_back(i);
+  }
+  const bool everyone_has_min = std::all_of(still.begin(), still.end(), [&](std::size_t i) {
+    return static_cast<int>(record.points[i].samples.size()) >= policy.min_samples;
+  });
+  if (!everyone_has_min || !by_headlines || still.empty()) return still;
+  const std::vector<bool> needed = hooks.points_needed(record);
+  std::vector<std::size_t> kept;
+  for (std::size_t i : still) {
+    if (i < needed.size() && !needed[i]) {
+      record.points[i].settled = true;
+      live.drop(i);
+    } else {
+      kept.push_back(i);
+    }
+  }
+  if (kept.empty()) record.stop_reason = "headlines settled";
+  return kept;
+}
+
+}  // namespace
+
 RunRecord run(const std::vector<std::string>& names, const std::vector<std::string>& skip, const Policy& policy,
               Hooks& hooks) {
   const double extra_pct = policy.extra_work_fraction * 100;
   if (extra_pct < 0 || extra_pct > 100 || std::abs(extra_pct - std::round(extra_pct)) > 1e-9)
     throw std::invalid_argument("extra work must be a whole percentage from 0 to 100");
+  if (policy.replicas < 1) throw std::invalid_argument("replicas must be at least 1");
   const auto start = std::chrono::steady_clock::now();
   RunRecord record;
   std::vector<std::size_t> active;
@@ -218,98 +347,27 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
     record.points.push_back(std::move(r));
   }
   std::mt19937_64 rng(policy.seed);
-  if (policy.replicas < 1) throw std::invalid_argument("replicas must be at least 1");
-  const auto replicas = static_cast<std::size_t>(policy.replicas);
-  // Live targets by point * replicas + replica.
-  std::map<std::size_t, std::unique_ptr<Target>> live;
-  std::list<std::size_t> recency;  // least recently visited first
+  LiveTargets live(policy, hooks);
   std::vector<double> last_visit_s(names.size(), 0.0);
   std::map<std::string, int> probe_frames;
   std::size_t visits = 0;
-
-  auto drop_key = [&](std::size_t key) {
-    live.erase(key);
-    recency.remove(key);
-  };
-  auto drop = [&](std::size_t i) {
-    for (std::size_t r = 0; r < replicas; ++r) drop_key(i * replicas + r);
-  };
-  auto make_room = [&](std::size_t keep) {
-    auto resident = [&] {
-      std::uint64_t sum = 0;
-      for (const auto& [i, t] : live) sum += t->resident_bytes();
-      return sum;
-    };
-    while (resident() > policy.resident_limit_bytes && live.size() > 1) {
-      const auto victim = std::find_if(recency.begin(), recency.end(), [&](std::size_t i) { return i != keep; });
-      if (victim == recency.end()) break;
-      drop_key(*victim);
-    }
-  };
-  auto skip_point = [&](std::size_t i, const std::string& why) {
-    record.points[i].skipped = why;
-    drop(i);
-  };
 
   const bool by_headlines = static_cast<bool>(hooks.points_needed);
   for (int round = 0; !active.empty() && !interrupted(); ++round) {
     const std::vector<std::size_t> order = round_order(active, hooks.visit_group, hooks.visit_block, round, rng);
     record.round_order.push_back(order);
     const auto probes_start = std::chrono::steady_clock::now();
-    for (auto& [name, probe] : hooks.probes) {
-      if (!probe) continue;
-      try {
-        if (round == 0) {
-          PointRecord warm;
-          probe_frames[name] = frames_for(warm_up(*probe, policy, warm), policy);
-        } else {
-          lead_in(*probe, record.probe_ms[name].back(), policy);
-        }
-        const Sample s = timed(*probe, probe_frames[name], probe_frames[name]);
-        record.probe_ms[name].push_back(s.frame_ms);
-        record.probe_cpu_ms[name].push_back(s.cpu_ms);
-      } catch (const std::exception& e) {  // its device gone (a runaway submission): the rounds go on without it
-        fmt::print(stderr, "warning: probe {} stopped after {} rounds: {}\n", name, record.probe_ms[name].size(), e.what());
-        probe.reset();
-      }
-    }
+    probe_round(hooks, policy, round, probe_frames, record);
     const double probes_s = seconds_since(probes_start);
     for (std::size_t i : order) {
       if (interrupted()) break;
       PointRecord& rec = record.points[i];
       const auto visit_start = std::chrono::steady_clock::now();
       try {
-        const std::size_t key = i * replicas + rec.samples.size() % replicas;
-        auto it = live.find(key);
-        if (it == live.end()) {
-          auto target = hooks.prepare(i);
-          ++rec.preparations;
-          it = live.emplace(key, std::move(target)).first;
-          if (rec.frames_per_sample == 0) {
-            rec.frames_per_sample = point_frames(warm_up(*it->second, policy, rec), policy);
-            if (hooks.first_ready) hooks.first_ready(i, *it->second);
-          } else {
-            // Another replica, or freed earlier to save memory: compile caches are warm already; one
-            // untimed frame takes the first touch of its fresh memory out of the samples.
-            it->second->warm_up();
-            it->second->measure(1);
-          }
-          make_room(key);
-        }
-        recency.remove(key);
-        recency.push_back(key);
-        lead_in(*it->second, rec.samples.empty() ? rec.warm_up_ms.back() : rec.samples.back().frame_ms, policy);
-        const int frames = rec.frames_per_sample, extra = extra_frames(frames, policy);
-        Sample sample = timed(*it->second, frames + extra, frames);
-        if (extra > 0) {  // the extra frames' time counts, spread over the frames reported
-          const double scale = static_cast<double>(frames + extra) / frames;
-          sample.frame_ms *= scale;
-          for (auto& [pass, ms] : sample.pass_ms) ms *= scale;
-        }
-        rec.samples.push_back(std::move(sample));
-        rec.sample_round.push_back(round);
+        take_sample(live.for_sample(i, rec), rec, policy, round);
       } catch (const std::exception& e) {
-        skip_point(i, e.what());
+        rec.skipped = e.what();
+        live.drop(i);
       }
       last_visit_s[i] = seconds_since(visit_start);
       rec.wall_s += last_visit_s[i];
@@ -336,42 +394,17 @@ RunRecord run(const std::vector<std::string>& names, const std::vector<std::stri
       }
     }
     if (interrupted()) break;
-    std::vector<std::size_t> still;
-    for (std::size_t i : active) {
-      PointRecord& rec = record.points[i];
-      if (!rec.skipped.empty()) continue;
-      rec.settled = settled(rec, policy, by_headlines);
-      if (rec.settled) drop(i); else still.push_back(i);
+    active = still_active(active, policy, hooks, record, live);
+    if (active.empty()) {
+      if (record.stop_reason.empty()) record.stop_reason = by_headlines ? "max_samples reached" : "every point settled";
+      break;
     }
-    active = std::move(still);
     const bool everyone_has_min = std::all_of(active.begin(), active.end(), [&](std::size_t i) {
       return static_cast<int>(record.points[i].samples.size()) >= policy.min_samples;
     });
-    if (everyone_has_min && hooks.points_needed && !active.empty()) {
-      const std::vector<bool> needed = hooks.points_needed(record);
-      std::vector<std::size_t> kept;
-      for (std::size_t i : active) {
-        if (i < needed.size() && !needed[i]) {
-          record.points[i].settled = true;
-          drop(i);
-        } else {
-          kept.push_back(i);
-        }
-      }
-      active = std::move(kept);
-      if (active.empty()) {
-        record.stop_reason = "headlines settled";
-        break;
-      }
-    }
-    auto next_round_s = [&] {  // as the points still active took in their last visits
-      double s = probes_s;
-      for (std::size_t i : active) s += last_visit_s[i];
-      return s;
-    };
-    if (active.empty()) {
-      record.stop_reason = by_headlines ? "max_samples reached" : "every point settled";
-    } else if (everyone_has_min && budget_spent(seconds_since(start), next_round_s(), policy.budget_s)) {
+    double next_round_s = probes_s;  // as the points still active took in their last visits
+    for (std::size_t i : active) next_round_s += last_visit_s[i];
+    if (everyone_has_min && budget_spent(seconds_since(start), next_round_s, policy.budget_s)) {
       record.stop_reason = "budget spent";
       break;
     }

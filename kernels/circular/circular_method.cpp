@@ -98,6 +98,51 @@ std::vector<PassWork> circular_work(const CircularFilterConfig& config, int w, i
   return work;
 }
 
+// The GPU filter's intermediates: component buffers, near/far layers, box sums, kernels' uniform
+// buffers and (adaptive) the tile lists; throws when a kernel exceeds the device's uniform range.
+MemoryUse circular_gpu_memory(int components, const FilterOptions& o, int w, int h, vk::Context* ctx) {
+  const CircularFilterConfig config = circular_config(o, components);
+  const auto px = static_cast<std::uint64_t>(w) * h;
+  const int near = config.near_components;
+  // Every kernel (one a field, or one a bucket and field) has its uniform buffer.
+  std::uint64_t kernels = 0, largest = 0;
+  for (int c : {components, near})
+    for (const CircularKernel& k : field_kernels(c, config)) {
+      kernels += circular_kernel_block_bytes(k);
+      largest = std::max(largest, circular_kernel_block_bytes(k));
+    }
+  // The kernels live in uniform buffers: say so before allocating when the device's are too small.
+  if (ctx && largest > ctx->info().max_uniform_buffer_range_bytes)
+    throw std::runtime_error(fmt::format("{}: a kernel of {} bytes exceeds {}'s maxUniformBufferRange of {} bytes "
+                                         "(a smaller max radius or fewer components fits)",
+                                         m_name(components), largest, ctx->info().name,
+                                         ctx->info().max_uniform_buffer_range_bytes));
+  const std::uint64_t inter =
+      std::max(components, near) * px * circular_component_bytes_per_pixel(config.precision);
+  const std::uint64_t layers = 2 * px * 16;
+  const std::uint64_t box = config.precision == IntermediatePrecision::bracketed10 ? px * 8 : 0;
+  MemoryUse use;
+  use.bytes = inter + layers + box + kernels;
+  use.details = {{"component_buffers_bytes", inter},
+                 {"near_far_layers_bytes", layers},
+                 {"box_sum_bytes", box},
+                 {"kernel_bytes", kernels}};
+  if (config.adaptive) {
+    // The field's sum (RGBA f32), the bucket table, and the tiles: list counts and two masks per
+    // field and tile, and one list per bucket, field and pass (tiles.glsl).
+    const auto tiles = static_cast<std::uint64_t>(tile_count(w, h));
+    const int buckets = bucket_count(config);
+    const std::uint64_t sum = px * 16, table = kCircularBucketTableBytes;
+    const std::uint64_t tile_bytes =
+        4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
+    use.bytes += sum + table + tile_bytes;
+    use.details["field_sum_bytes"] = sum;
+    use.details["bucket_table_bytes"] = table;
+    use.details["tile_bytes"] = tile_bytes;
+  }
+  return use;
+}
+
 Method circular_method(int components) {
   Method m;
   m.name = m_name(components);
@@ -151,46 +196,7 @@ Method circular_method(int components) {
     return circular_work(circular_config(o, components), w, h);
   };
   m.gpu_memory = [components](const FilterOptions& o, int w, int h, vk::Context* ctx) {
-    const CircularFilterConfig config = circular_config(o, components);
-    const auto px = static_cast<std::uint64_t>(w) * h;
-    const int near = config.near_components;
-    // Every kernel (one a field, or one a bucket and field) has its uniform buffer.
-    std::uint64_t kernels = 0, largest = 0;
-    for (int c : {components, near})
-      for (const CircularKernel& k : field_kernels(c, config)) {
-        kernels += circular_kernel_block_bytes(k);
-        largest = std::max(largest, circular_kernel_block_bytes(k));
-      }
-    // The kernels live in uniform buffers: say so before allocating when the device's are too small.
-    if (ctx && largest > ctx->info().max_uniform_buffer_range_bytes)
-      throw std::runtime_error(fmt::format("{}: a kernel of {} bytes exceeds {}'s maxUniformBufferRange of {} bytes "
-                                           "(a smaller max radius or fewer components fits)",
-                                           m_name(components), largest, ctx->info().name,
-                                           ctx->info().max_uniform_buffer_range_bytes));
-    const std::uint64_t inter =
-        std::max(components, near) * px * circular_component_bytes_per_pixel(config.precision);
-    const std::uint64_t layers = 2 * px * 16;
-    const std::uint64_t box = config.precision == IntermediatePrecision::bracketed10 ? px * 8 : 0;
-    MemoryUse use;
-    use.bytes = inter + layers + box + kernels;
-    use.details = {{"component_buffers_bytes", inter},
-                   {"near_far_layers_bytes", layers},
-                   {"box_sum_bytes", box},
-                   {"kernel_bytes", kernels}};
-    if (config.adaptive) {
-      // The field's sum (RGBA f32), the bucket table, and the tiles: list counts and two masks per
-      // field and tile, and one list per bucket, field and pass (tiles.glsl).
-      const auto tiles = static_cast<std::uint64_t>(tile_count(w, h));
-      const int buckets = bucket_count(config);
-      const std::uint64_t sum = px * 16, table = kCircularBucketTableBytes;
-      const std::uint64_t tile_bytes =
-          4 * (4 * 32 + 4 * tiles) + 4 * (64 + 2 * static_cast<std::uint64_t>(buckets)) * tiles;
-      use.bytes += sum + table + tile_bytes;
-      use.details["field_sum_bytes"] = sum;
-      use.details["bucket_table_bytes"] = table;
-      use.details["tile_bytes"] = tile_bytes;
-    }
-    return use;
+    return circular_gpu_memory(components, o, w, h, ctx);
   };
   // The near and far RGBA layers, one convolution's intermediates (real and imaginary planes of 4
   // channels per component, held as f32 at every precision) and its blurred RGBA output; near and far

@@ -441,7 +441,7 @@ class Flag final : public gpu::GpuFilter {
 }  // namespace
 
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options) {
-  if (!options.aperture.is_disc()) return make_flag_shape_gpu(frame, flag_config(options), options.aperture);
+  if (!options.aperture.is_disc()) throw std::logic_error("make_flag_gpu: the disc only (make_flag_shape_gpu: others)");
   return std::make_unique<Flag>(frame, flag_config(options));
 }
 

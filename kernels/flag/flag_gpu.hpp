@@ -83,18 +83,10 @@ FlagStreamRing flag_stream_ring(const FlagBufferExtent& full, int spacing_px, La
 // correctly (flag_gpu.cpp has the measurements); beyond, it returns zero layers without an error.
 constexpr int kFlagSoftwareMaxBlockLayers = 324;
 
-// Parses `options` once (flag_config) and makes the filter (a non-disc aperture: make_flag_shape_gpu).
+// Parses `options` once (flag_config) and makes the filter for the disc aperture (any other
+// aperture: make_flag_shape_gpu, flag_shape_gpu.hpp, which builds on this file's parts).
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
-struct FlagConfig;
-// FLAG for a non-disc aperture (flag_shape.hpp, flag_shape_gpu.cpp): passes shape_pack, horizontal
-// (chord extents), vertical (or both as "streamed"), in the configurations Method::aperture_unsupported
-// accepts (per-value precisions, indexed bins, scale 1, adaptive off).
-std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
-                                                    const Aperture& aperture);
-// The layer image of a non-disc aperture as make_flag_shape_gpu allocates it: the frame's rows, or
-// (layer_buffer = streamed) the ring's B + 2 n k rows and the band B (band_rows 0: the full buffer).
-FlagStreamRing flag_shape_layer_rows(const FlagConfig& config, int layers, int width_px, int height_px,
-                                     bool software_device);
+
 // The unsigned formats cannot hold negative layer values: checks the uploaded colour once, with the
 // CPU reference's message (check_layer_input).
 void check_frame_colour(gpu::GpuFrame& frame, LayerPrecision precision);

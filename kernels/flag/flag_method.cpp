@@ -17,6 +17,7 @@
 #include "flag_memory.hpp"
 #include "flag_reduced.hpp"
 #include "flag_shape.hpp"
+#include "flag_shape_gpu.hpp"
 #include "flag_tiles.hpp"
 #include "method.hpp"
 #include "vk/memory.hpp"
@@ -204,6 +205,66 @@ std::string flag_shape_unsupported(const FilterOptions& o) {
                      o.aperture.name(), fmt::join(why, ", "));
 }
 
+// The method's own options (flag_config parses them).
+std::vector<OptionSpec> flag_options() {
+  return {{"horizontal_block",
+           "flag: pixels per GPU invocation of the horizontal pass, at stride k (auto: 4 on CPU devices such as "
+           "lavapipe, 1 on GPUs; every block gives the same image)",
+           0, 0, 0, false, flag_horizontal_blocks()},
+          {"horizontal_bins",
+           "flag: how the GPU horizontal pass bins each row sample into the layer its disc reaches. indexed: "
+           "bins[z] += sample (one add per sample, the paper's O(N + n)); masked: every bin tests the sample "
+           "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
+           "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
+           "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU devices such as lavapipe masked up to 21 layers (N = 41), scan "
+           "beyond; indexed on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
+           0, 0, 0, false, flag_horizontal_bins()},
+          {"vertical_order",
+           "flag: the order the GPU vertical pass's workgroups take their tiles. rows: row-major; columns: down "
+           "8-px column strips, so a layer row's second read (by the output row 2 j k below its first) finds it "
+           "in cache; auto: columns on CPU devices such as lavapipe, rows on GPUs. Every order gives the same "
+           "image bit for bit",
+           0, 0, 0, false, flag_vertical_orders()},
+          adaptive_option("flag, off: a ceil(N/2)-layer 3D buffer and every pixel's gather over the whole "
+                          "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "
+                          "GPU when the run is prepared, one int read back), a tile-max CoC map bounding each "
+                          "workgroup's row samples and each tile's layers, and tiles nothing blurred reaches "
+                          "output their input: the worst case's image bit for bit (f32; with scan bins, to f32 "
+                          "rounding: a layer nothing reaches keeps the scan's rounding residue, which the worst "
+                          "case adds and adaptive skips), or up to one rounding of the layer format in those "
+                          "tiles"),
+          adaptive_tile_option(),
+          {"layer_buffer",
+           "flag: where the horizontal pass leaves the layers for the vertical pass. full: the paper's 3D buffer "
+           "(W x H x ceil(N/2) texels; the default and the reference); streamed: a ring of B + 2 n k rows filled "
+           "band by band (B = --band-rows output rows a band), the two passes alternating per band in one "
+           "command buffer: the full buffer's image bit for bit in a fraction of its memory",
+           0, 0, 0, false, flag_layer_buffers(), {0, 1}},
+          {"band_rows",
+           "flag, layer_buffer = streamed: output rows per band (0: auto, the largest band whose ring fits 16 MiB "
+           "on CPU devices such as lavapipe and 32 MiB on GPUs, at least 8 rows). Fewer rows: less memory, more "
+           "dispatches (two a band); the image is the same for every value",
+           0, 0, 1 << 16, true, {}}};
+}
+
+// The CPU reference's intermediates, by the path it takes (cpu_path).
+std::uint64_t flag_cpu_memory_bytes(const FilterOptions& o, int w, int h) {
+  const FlagConfig c = flag_config(o);
+  if (!o.aperture.is_disc()) {  // the packed input (4 floats a pixel) and the whole 3D buffer in f32
+    return static_cast<std::uint64_t>(w) * h * (16 + flag_aperture_layers(o.aperture, c.pattern) * std::uint64_t{12});
+  }
+  if (const int band = cpu_band_rows(c, w); band > 0)
+    return flag_streamed_cpu_bytes(w, h, c.pattern, band, default_cpu_threads());
+  // flag_blur on the grid (reduced: the low-resolution input, 4 floats a pixel, and blur, 3, besides),
+  // or for bracketed precisions flag_blur_reference's whole 3D buffer in f32.
+  const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
+  const auto lw = static_cast<std::uint64_t>(ceil_div(w, c.buffer_scale));
+  const auto lh = static_cast<std::uint64_t>(ceil_div(h, c.buffer_scale));
+  const std::uint64_t low_images = c.buffer_scale == 1 ? 0 : lw * lh * 7 * sizeof(float);
+  if (is_bracketed(c.precision)) return low_images + lw * lh * low.layers() * 3 * sizeof(float);
+  return low_images + flag_blur_cpu_bytes(static_cast<int>(lw), static_cast<int>(lh), low, default_cpu_threads());
+}
+
 }  // namespace
 
 void declare_flag(std::vector<Method>& methods) {
@@ -214,44 +275,7 @@ void declare_flag(std::vector<Method>& methods) {
   // The paper's RGBA16F first: the default.
   std::swap(m.precisions[0], m.precisions[1]);
   m.buffer_scales = flag_buffer_scales();
-  m.options = {{"horizontal_block",
-                "flag: pixels per GPU invocation of the horizontal pass, at stride k (auto: 4 on CPU devices such as "
-                "lavapipe, 1 on GPUs; every block gives the same image)",
-                0, 0, 0, false, flag_horizontal_blocks()},
-               {"horizontal_bins",
-                "flag: how the GPU horizontal pass bins each row sample into the layer its disc reaches. indexed: "
-                "bins[z] += sample (one add per sample, the paper's O(N + n)); masked: every bin tests the sample "
-                "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
-                "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
-                "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU devices such as lavapipe masked up to 21 layers (N = 41), scan "
-                "beyond; indexed on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
-                0, 0, 0, false, flag_horizontal_bins()},
-               {"vertical_order",
-                "flag: the order the GPU vertical pass's workgroups take their tiles. rows: row-major; columns: down "
-                "8-px column strips, so a layer row's second read (by the output row 2 j k below its first) finds it "
-                "in cache; auto: columns on CPU devices such as lavapipe, rows on GPUs. Every order gives the same "
-                "image bit for bit",
-                0, 0, 0, false, flag_vertical_orders()},
-               adaptive_option("flag, off: a ceil(N/2)-layer 3D buffer and every pixel's gather over the whole "
-                               "pattern (the worst case); on: layers for the scene's largest radius (reduced on the "
-                               "GPU when the run is prepared, one int read back), a tile-max CoC map bounding each "
-                               "workgroup's row samples and each tile's layers, and tiles nothing blurred reaches "
-                               "output their input: the worst case's image bit for bit (f32; with scan bins, to f32 "
-                               "rounding: a layer nothing reaches keeps the scan's rounding residue, which the worst "
-                               "case adds and adaptive skips), or up to one rounding of the layer format in those "
-                               "tiles"),
-               adaptive_tile_option(),
-               {"layer_buffer",
-                "flag: where the horizontal pass leaves the layers for the vertical pass. full: the paper's 3D buffer "
-                "(W x H x ceil(N/2) texels; the default and the reference); streamed: a ring of B + 2 n k rows filled "
-                "band by band (B = --band-rows output rows a band), the two passes alternating per band in one "
-                "command buffer: the full buffer's image bit for bit in a fraction of its memory",
-                0, 0, 0, false, flag_layer_buffers(), {0, 1}},
-               {"band_rows",
-                "flag, layer_buffer = streamed: output rows per band (0: auto, the largest band whose ring fits 16 MiB "
-                "on CPU devices such as lavapipe and 32 MiB on GPUs, at least 8 rows). Fewer rows: less memory, more "
-                "dispatches (two a band); the image is the same for every value",
-                0, 0, 1 << 16, true, {}}};
+  m.options = flag_options();
   // Every function below parses the options once (flag_config) and reads only the FlagConfig.
   m.device = [](const FilterOptions& o) {
     const FlagConfig c = flag_config(o);
@@ -278,7 +302,9 @@ void declare_flag(std::vector<Method>& methods) {
     }
     return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
-  m.make_gpu = make_flag_gpu;
+  m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) {
+    return o.aperture.is_disc() ? make_flag_gpu(frame, o) : make_flag_shape_gpu(frame, flag_config(o), o.aperture);
+  };
   m.work = [](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
     if (o.aperture.is_disc()) return flag_work(c, w, h);
@@ -307,22 +333,7 @@ void declare_flag(std::vector<Method>& methods) {
     if (!o.aperture.is_disc()) return flag_shape_gpu_memory(flag_config(o), o.aperture, w, h, ctx);
     return flag_gpu_memory(flag_config(o), w, h, ctx);
   };
-  m.cpu_memory_bytes = [](const FilterOptions& o, int w, int h) {
-    const FlagConfig c = flag_config(o);
-    if (!o.aperture.is_disc()) {  // the packed input (4 floats a pixel) and the whole 3D buffer in f32
-      return static_cast<std::uint64_t>(w) * h * (16 + flag_aperture_layers(o.aperture, c.pattern) * std::uint64_t{12});
-    }
-    if (const int band = cpu_band_rows(c, w); band > 0)
-      return flag_streamed_cpu_bytes(w, h, c.pattern, band, default_cpu_threads());
-    // flag_blur on the grid (reduced: the low-resolution input, 4 floats a pixel, and blur, 3, besides),
-    // or for bracketed precisions flag_blur_reference's whole 3D buffer in f32.
-    const GatherPattern low = reduced_pattern(c.pattern, c.buffer_scale);
-    const auto lw = static_cast<std::uint64_t>(ceil_div(w, c.buffer_scale));
-    const auto lh = static_cast<std::uint64_t>(ceil_div(h, c.buffer_scale));
-    const std::uint64_t low_images = c.buffer_scale == 1 ? 0 : lw * lh * 7 * sizeof(float);
-    if (is_bracketed(c.precision)) return low_images + lw * lh * low.layers() * 3 * sizeof(float);
-    return low_images + flag_blur_cpu_bytes(static_cast<int>(lw), static_cast<int>(lh), low, default_cpu_threads());
-  };
+  m.cpu_memory_bytes = flag_cpu_memory_bytes;
   // Against the CPU emulation of the same format. Each output sums 2n+1 non-negative layer values,
   // none larger than the image's largest output (layer 0 of the pixel's own row is part of it):
   //   f32: summation order only; f16 / r11g11b10f: one ulp per stored value (Vulkan lets the GPU round

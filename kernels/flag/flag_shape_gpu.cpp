@@ -12,6 +12,7 @@
 #include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
+#include "flag_shape_gpu.hpp"
 #include "vk/spirv.hpp"
 
 namespace bokeh {

@@ -1,0 +1,22 @@
+#pragma once
+// FLAG for a non-disc aperture on the GPU (flag_shape_gpu.cpp): built on the disc's parts (flag_gpu.hpp:
+// binning, streamed ring, checks), which know nothing of it.
+#include <memory>
+
+#include "aperture.hpp"
+#include "flag_gpu.hpp"
+
+namespace bokeh {
+
+struct FlagConfig;
+// FLAG for a non-disc aperture (flag_shape.hpp, flag_shape_gpu.cpp): passes shape_pack, horizontal
+// (chord extents), vertical (or both as "streamed"), in the configurations Method::aperture_unsupported
+// accepts (per-value precisions, indexed bins, scale 1, adaptive off).
+std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
+                                                    const Aperture& aperture);
+// The layer image of a non-disc aperture as make_flag_shape_gpu allocates it: the frame's rows, or
+// (layer_buffer = streamed) the ring's B + 2 n k rows and the band B (band_rows 0: the full buffer).
+FlagStreamRing flag_shape_layer_rows(const FlagConfig& config, int layers, int width_px, int height_px,
+                                     bool software_device);
+
+}  // namespace bokeh
