@@ -266,48 +266,9 @@ FilterOptions reference_options(const Method& reference, const FilterOptions& o)
 
 // ---- The manifest into a Method ----
 
-// `folder`: where the files are (a temporary checkout for FOLDER@REV); `home`: the folder results name.
-Method read_package(const std::string& reference, const fs::path& folder, const fs::path& home, const std::string& rev,
-                    const std::set<std::string>& taken) {
-  const fs::path manifest_path = folder / kPackageManifest;
-  const std::string file = reference + "/" + kPackageManifest;
-  if (!fs::is_regular_file(manifest_path))
-    throw std::invalid_argument(fmt::format("'{}' is not a method package: it has no {}", reference, kPackageManifest));
-  json manifest;
-  try {
-    manifest = json::parse(read_text_file(manifest_path.string(), "package manifest"));
-  } catch (const json::parse_error& e) {
-    throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", file, e.what()));
-  }
-  const Fields top(manifest, "", file);
-  top.only({"$schema", "name", "description", "precisions", "samples_pattern", "options", "buffers", "passes",
-            "cpu_reference", "gpu_tolerance", "storage_tolerance", "conserves_energy", "energy_note"});
-
-  auto pkg = std::make_shared<Package>();
-  pkg->reference = reference;
-  pkg->path = fs::absolute(home).lexically_normal().string();
-  pkg->rev = rev;
-  pkg->hash = hash_folder(folder);
-  pkg->name = top.text("name");
-  if (!std::regex_match(pkg->name, std::regex("[a-z][a-z0-9_]*")))
-    top.fail("name", fmt::format("'{}' must match [a-z][a-z0-9_]* (it names the method in results)", pkg->name));
-  for (const Method& m : registered_methods())
-    if (m.name == pkg->name) top.fail("name", fmt::format("'{}' is a built-in method's name: choose another", pkg->name));
-
-  Method m;
-  m.name = taken.count(pkg->name) ? fmt::format("{}@{:08x}", pkg->name, pkg->hash >> 32) : pkg->name;
-  m.description = top.text_or("description", "method package " + pkg->name);
-  m.in_default_sweeps = false;  // a package runs where it is named
-  m.samples_pattern = top.flag("samples_pattern", true);
-  for (const json& p : top.array("precisions", false)) {
-    if (!p.is_string()) top.fail("precisions", "must be strings");
-    m.precisions.push_back(p.get<std::string>());
-  }
-  if (m.precisions.empty()) m.precisions = {"f32"};
-  const json& options = top.array("options", false);
-  for (std::size_t i = 0; i < options.size(); ++i) m.options.push_back(read_option(Fields(options[i], fmt::format("options[{}]", i), file)));
-  pkg->options = m.options;
-
+// The manifest's intermediates (bindings 5, 6, ... in order), each checked.
+std::vector<BufferDecl> read_buffers(const Fields& top, const std::string& file) {
+  std::vector<BufferDecl> out;
   std::set<std::string> names;
   const json& buffers = top.array("buffers", false);
   for (std::size_t i = 0; i < buffers.size(); ++i) {
@@ -318,9 +279,14 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
     if (!names.insert(b.name).second) f.fail(f.path("name"), "'" + b.name + "' is declared twice");
     if (!(b.element_bytes = element_bytes(b.format)))
       f.fail(f.path("format"), fmt::format("'{}' is not one of r32f, r32ui, r32i, rg32f, rgba16f, rgba32f, rgba32ui", b.format));
-    pkg->buffers.push_back(std::move(b));
+    out.push_back(std::move(b));
   }
+  return out;
+}
 
+// The manifest's passes in order: grid, workgroup, specialization constants, work model.
+std::vector<PassDecl> read_passes(const Fields& top, const std::string& file) {
+  std::vector<PassDecl> out;
   const json& passes = top.array("passes", true);
   if (passes.empty()) top.fail("passes", "must name at least one pass (the last writes binding 4, the output)");
   std::set<std::string> pass_names = {"coc", "prepare"};  // the harness's own passes
@@ -361,55 +327,43 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
       pass.bytes_read = wf.expression("bytes_read", false);
       pass.bytes_written = wf.expression("bytes_written", false);
     }
-    pkg->passes.push_back(std::move(pass));
+    out.push_back(std::move(pass));
   }
+  return out;
+}
 
-  if (top.has("cpu_reference")) {
-    const Fields f(top.at("cpu_reference"), "cpu_reference", file);
-    f.only({"builtin"});
-    const std::string builtin = f.text("builtin");
-    const auto& all = registered_methods();
-    const auto it = std::find_if(all.begin(), all.end(), [&](const Method& b) { return b.name == builtin; });
-    if (it == all.end()) f.fail(f.path("builtin"), fmt::format("'{}' is not a built-in method", builtin));
-    pkg->reference_method = &*it;
+// Every expression evaluated once at a small frame, so a typo or an unknown variable fails at load;
+// every shader compiled, so a compile error names its file and line before any work, and what each
+// binds checked against what the manifest declares.
+void check_and_compile(Package& pkg, const Method& m, const fs::path& folder, const std::string& file) {
+  const Variables v = variables_of(pkg, m.defaults({9, 2}), 64, 48);
+  for (const auto& pass : pkg.passes) {
+    for (const auto& e : pass.invocations) e.count(v);
+    for (const auto& c : pass.constants) c.value.evaluate(v);
+    for (const Expression* e : {&pass.taps, &pass.bytes_read, &pass.bytes_written})
+      if (!e->empty()) e->evaluate(v);
   }
-  const double gpu_tolerance = top.number("gpu_tolerance", 1e-5);
-  const double storage_tolerance = top.number("storage_tolerance", 0);
-  if (!(gpu_tolerance >= 0) || !(storage_tolerance >= 0)) top.fail("gpu_tolerance", "and storage_tolerance must be >= 0");
-  m.conserves_energy = top.flag("conserves_energy", false);
-  m.energy_note = top.text_or("energy_note", m.conserves_energy ? "" : "the package does not declare that it conserves energy");
-
-  // Every expression evaluated once at a small frame, so a typo or an unknown variable fails now.
-  {
-    const Variables v = variables_of(*pkg, m.defaults({9, 2}), 64, 48);
-    for (const auto& pass : pkg->passes) {
-      for (const auto& e : pass.invocations) e.count(v);
-      for (const auto& c : pass.constants) c.value.evaluate(v);
-      for (const Expression* e : {&pass.taps, &pass.bytes_read, &pass.bytes_written})
-        if (!e->empty()) e->evaluate(v);
-    }
-  }
-  // Every shader compiled now: a compile error names its file and line before any work.
-  const std::uint64_t source_hash = pkg->hash ^ package::shader_library_hash();
-  for (auto& pass : pkg->passes) {
+  const std::uint64_t source_hash = pkg.hash ^ package::shader_library_hash();
+  for (auto& pass : pkg.passes) {
     if (!fs::is_regular_file(folder / pass.shader))
       throw std::invalid_argument(fmt::format("{}: passes '{}': shader '{}' is not a file in the package", file, pass.name, pass.shader));
     pass.spirv = package::compile_compute_shader(folder, pass.shader, source_hash);
-    const std::uint32_t declared = kFixedBindings + static_cast<std::uint32_t>(pkg->buffers.size());
+    const std::uint32_t declared = kFixedBindings + static_cast<std::uint32_t>(pkg.buffers.size());
     for (const auto& [set, binding] : package::descriptor_bindings(pass.spirv))
       if (set != 0 || binding >= declared)
         throw std::invalid_argument(fmt::format(
             "{}: passes '{}': {} binds set {} binding {}, which the manifest does not declare (set 0: bindings 0-4 "
             "are the harness's, {})",
             file, pass.name, pass.shader, set, binding,
-            pkg->buffers.empty() ? std::string("and the manifest declares no buffers")
-                                 : fmt::format("5-{} the manifest's buffers in order", declared - 1)));
+            pkg.buffers.empty() ? std::string("and the manifest declares no buffers")
+                                : fmt::format("5-{} the manifest's buffers in order", declared - 1)));
   }
+}
 
-  m.package = {{"name", pkg->name}, {"hash", fmt::format("{:016x}", pkg->hash)}, {"path", pkg->path}};
-  if (!rev.empty()) m.package["rev"] = rev;
-
-  std::shared_ptr<const Package> shared = pkg;
+// The Method's functions over the loaded package: plan, GPU driver, work, memory, tolerances and the
+// built-in CPU reference it names.
+void set_functions(Method& m, std::shared_ptr<const Package> shared, const std::string& file, double gpu_tolerance,
+                   double storage_tolerance) {
   m.unsupported = [shared, file](const FilterOptions& o, int w, int h) -> std::string {
     try {
       const Variables v = variables_of(*shared, o, w, h);
@@ -453,7 +407,7 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
   };
   m.gpu_tolerance = [gpu_tolerance](const FilterOptions&) { return gpu_tolerance; };
   m.storage_tolerance = [storage_tolerance](const FilterOptions&) { return storage_tolerance; };
-  if (const Method* r = pkg->reference_method) {
+  if (const Method* r = shared->reference_method) {
     m.cpu_reference = [r](const CpuInput& in) {
       const FilterOptions options = reference_options(*r, in.options);
       return r->cpu_reference({in.color, in.depth_m, in.lens, in.radius_px, in.packed, options, in.threads, in.stats});
@@ -466,6 +420,74 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
       return r->cpu_work ? r->cpu_work(options, w, h) : r->work(options, w, h);
     };
   }
+}
+
+// `folder`: where the files are (a temporary checkout for FOLDER@REV); `home`: the folder results name.
+Method read_package(const std::string& reference, const fs::path& folder, const fs::path& home, const std::string& rev,
+                    const std::set<std::string>& taken) {
+  const fs::path manifest_path = folder / kPackageManifest;
+  const std::string file = reference + "/" + kPackageManifest;
+  if (!fs::is_regular_file(manifest_path))
+    throw std::invalid_argument(fmt::format("'{}' is not a method package: it has no {}", reference, kPackageManifest));
+  json manifest;
+  try {
+    manifest = json::parse(read_text_file(manifest_path.string(), "package manifest"));
+  } catch (const json::parse_error& e) {
+    throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", file, e.what()));
+  }
+  const Fields top(manifest, "", file);
+  top.only({"$schema", "name", "description", "precisions", "samples_pattern", "options", "buffers", "passes",
+            "cpu_reference", "gpu_tolerance", "storage_tolerance", "conserves_energy", "energy_note"});
+
+  auto pkg = std::make_shared<Package>();
+  pkg->reference = reference;
+  pkg->path = fs::absolute(home).lexically_normal().string();
+  pkg->rev = rev;
+  pkg->hash = hash_folder(folder);
+  pkg->name = top.text("name");
+  if (!std::regex_match(pkg->name, std::regex("[a-z][a-z0-9_]*")))
+    top.fail("name", fmt::format("'{}' must match [a-z][a-z0-9_]* (it names the method in results)", pkg->name));
+  for (const Method& m : registered_methods())
+    if (m.name == pkg->name) top.fail("name", fmt::format("'{}' is a built-in method's name: choose another", pkg->name));
+
+  Method m;
+  m.name = taken.count(pkg->name) ? fmt::format("{}@{:08x}", pkg->name, pkg->hash >> 32) : pkg->name;
+  m.description = top.text_or("description", "method package " + pkg->name);
+  m.in_default_sweeps = false;  // a package runs where it is named
+  m.samples_pattern = top.flag("samples_pattern", true);
+  for (const json& p : top.array("precisions", false)) {
+    if (!p.is_string()) top.fail("precisions", "must be strings");
+    m.precisions.push_back(p.get<std::string>());
+  }
+  if (m.precisions.empty()) m.precisions = {"f32"};
+  const json& options = top.array("options", false);
+  for (std::size_t i = 0; i < options.size(); ++i) m.options.push_back(read_option(Fields(options[i], fmt::format("options[{}]", i), file)));
+  pkg->options = m.options;
+
+  pkg->buffers = read_buffers(top, file);
+  pkg->passes = read_passes(top, file);
+
+  if (top.has("cpu_reference")) {
+    const Fields f(top.at("cpu_reference"), "cpu_reference", file);
+    f.only({"builtin"});
+    const std::string builtin = f.text("builtin");
+    const auto& all = registered_methods();
+    const auto it = std::find_if(all.begin(), all.end(), [&](const Method& b) { return b.name == builtin; });
+    if (it == all.end()) f.fail(f.path("builtin"), fmt::format("'{}' is not a built-in method", builtin));
+    pkg->reference_method = &*it;
+  }
+  const double gpu_tolerance = top.number("gpu_tolerance", 1e-5);
+  const double storage_tolerance = top.number("storage_tolerance", 0);
+  if (!(gpu_tolerance >= 0) || !(storage_tolerance >= 0)) top.fail("gpu_tolerance", "and storage_tolerance must be >= 0");
+  m.conserves_energy = top.flag("conserves_energy", false);
+  m.energy_note = top.text_or("energy_note", m.conserves_energy ? "" : "the package does not declare that it conserves energy");
+
+  check_and_compile(*pkg, m, folder, file);
+
+  m.package = {{"name", pkg->name}, {"hash", fmt::format("{:016x}", pkg->hash)}, {"path", pkg->path}};
+  if (!rev.empty()) m.package["rev"] = rev;
+
+  set_functions(m, pkg, file, gpu_tolerance, storage_tolerance);
   return m;
 }
 
