@@ -71,8 +71,12 @@ def main(status, json_path, command):
             holds = value <= bound
             if holds != (relation == "<=") or holds != (verdict == "PASS"):
                 fail(f"'{name}': {verdict} but {value} {relation} {bound}", output)
-            if not (math.isclose(value, entry["value"], rel_tol=1e-2, abs_tol=1e-12) and
-                    math.isclose(bound, entry["bound"], rel_tol=1e-2, abs_tol=1e-12)):
+            # JSON has no NaN or Inf: a non-finite number is written as null.
+            def same(printed, written):
+                if written is None:
+                    return not math.isfinite(printed)
+                return math.isclose(printed, written, rel_tol=1e-2, abs_tol=1e-12)
+            if not (same(value, entry["value"]) and same(bound, entry["bound"])):
                 fail(f"'{name}': the line says {value} and {bound}, the JSON {entry['value']} and {entry['bound']}",
                      output)
     verdict, reason = results["error vs the exact reference"]

@@ -246,8 +246,15 @@ class PackageGpu final : public gpu::GpuFilter {
   std::shared_ptr<const Package> pkg_;
   FilterOptions options_;
   // The pass about to run, written by the device in command order: what running_pass() reads
-  // when a submission runs past the watchdog (a package's shader may loop without end).
-  void mark_progress(VkCommandBuffer cmd, std::uint32_t pass) { vkCmdFillBuffer(cmd, progress_.get(), 0, 4, pass); }
+  // when a submission runs past the watchdog (a package's shader may loop without end). The barrier
+  // orders each mark after the one before (the validation layer's write-after-write hazard).
+  void mark_progress(VkCommandBuffer cmd, std::uint32_t pass) {
+    vkCmdFillBuffer(cmd, progress_.get(), 0, 4, pass);
+    VkMemoryBarrier written{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    written.srcAccessMask = written.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &written, 0, nullptr, 0,
+                         nullptr);
+  }
 
   gpu::SignedCocPass signed_coc_;
   vk::Buffer progress_{frame_.ctx, 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::Buffer::Where::host};
