@@ -160,6 +160,7 @@ class Checker {
   const Method& method() const { return method_; }
   const FilterOptions& options() const { return options_; }
   std::string device_name() { return ctx_ ? ctx_->info().name : ""; }
+  const vk::DeviceInfo* device_info() const { return ctx_ ? &ctx_->info() : nullptr; }
 
   // Every check: id (for --only), name (as printed), what it does.
   std::vector<std::tuple<std::string, std::string, std::function<Outcome()>>> checks() {
@@ -544,7 +545,7 @@ void check(const CheckOptions& o) {
                           {"checks", nlohmann::json::array()}};
     for (const auto& r : results) doc["checks"].push_back(result_json(r));
     ensure_parent_dir(o.json_path);
-    write_text_file_atomically(o.json_path, doc.dump(2) + "\n", "check results");
+    write_results(o.json_path, "bokehbench.check", run_context(checker.device_info()), doc);
     fmt::print("wrote {}\n", o.json_path);
   }
   fmt::print("{} passed, {} failed, {} skipped\n", counts[0], counts[1], counts[2]);
