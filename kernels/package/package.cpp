@@ -443,8 +443,8 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
     throw std::invalid_argument(fmt::format("{}: not valid JSON: {}", file, e.what()));
   }
   const Fields top(manifest, "", file);
-  top.only({"$schema", "name", "description", "precisions", "samples_pattern", "options", "buffers", "passes",
-            "cpu_reference", "gpu_tolerance", "storage_tolerance", "conserves_energy", "energy_note"});
+  top.only({"$schema", "name", "description", "precisions", "samples_pattern", "buffer_scales", "options", "buffers",
+            "passes", "cpu_reference", "gpu_tolerance", "storage_tolerance", "conserves_energy", "energy_note"});
 
   auto pkg = std::make_shared<Package>();
   pkg->reference = reference;
@@ -467,6 +467,18 @@ Method read_package(const std::string& reference, const fs::path& folder, const 
     m.precisions.push_back(p.get<std::string>());
   }
   if (m.precisions.empty()) m.precisions = {"f32"};
+  // Resolution divisors of its intermediates (the variable buffer_scale): sweeps take each, as FLAG's.
+  if (top.has("buffer_scales")) {
+    m.buffer_scales.clear();
+    for (const json& b : top.array("buffer_scales", true)) {
+      if (!b.is_number_unsigned() || b.get<int>() < 1 || b.get<int>() > 64)
+        top.fail("buffer_scales", "must be whole numbers from 1 to 64");
+      if (std::find(m.buffer_scales.begin(), m.buffer_scales.end(), b.get<int>()) == m.buffer_scales.end())
+        m.buffer_scales.push_back(b.get<int>());
+    }
+    if (std::find(m.buffer_scales.begin(), m.buffer_scales.end(), 1) == m.buffer_scales.end())
+      top.fail("buffer_scales", "must include 1 (full resolution, the default)");
+  }
   const json& options = top.array("options", false);
   for (std::size_t i = 0; i < options.size(); ++i) m.options.push_back(read_option(Fields(options[i], fmt::format("options[{}]", i), file)));
   pkg->options = m.options;
