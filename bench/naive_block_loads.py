@@ -3,7 +3,7 @@
 counted from the shader's loop bounds: per block, every sample row j in [-n, n + 3] inside the frame loads
 the columns i in [-span, span + 7] inside the frame, span the largest disc reach over the block's 4 output
 rows. Each such load is one per-lane buffer load, which lavapipe executes as scalar loads, so the pass's time
-follows this count (README, Figure 9: "Why naive's slope is below 2").
+follows this count (results/README.md, Figure 9: "Why naive's slope is below 2").
 
 usage: bench/naive_block_loads.py [FIGURE9_JSON]
   prints the loads per frame at each N of figure9's default sizes (800x600, k = 2) and their growth exponent

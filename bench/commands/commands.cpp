@@ -305,13 +305,13 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
   processes_option = cmd->add_option("--processes", processes,
                                      "Measure in this many processes one after another, each for the budget's share, "
                                      "their rounds joined: figures then carry the spread between processes, which "
-                                     "one process's rounds cannot show (README, \"Do two runs agree?\")")
+                                     "one process's rounds cannot show (results/README.md, \"Do two runs agree?\")")
                          ->check(CLI::Range(1, 16))
                          ->capture_default_str();
   cmd->add_option("--replicas", replicas,
                   "Prepare each point this many times (each with allocations of its own), its visits taking them in "
                   "turn: on machines where memory placement is a draw, a point's samples then span that many draws "
-                  "(README, \"Do two runs agree?\"); costs that many times the intermediates' memory")
+                  "(results/README.md, \"Do two runs agree?\"); costs that many times the intermediates' memory")
       ->check(CLI::Range(1, 8))
       ->capture_default_str();
   // Internal: how a run of several processes starts each of them (processes.hpp).

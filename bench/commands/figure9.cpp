@@ -544,7 +544,7 @@ void print_summary(const nlohmann::json& doc) {
   }
   print_between_processes(doc["headlines"]);
   print_repeat_basis(doc["measurement"]);
-  // The ratios move with the machine's memory speed (README, "Do two runs agree?"): say what it was.
+  // The ratios move with the machine's memory speed (results/README.md, "Do two runs agree?"): say what it was.
   if (const auto& limits = doc["measurement"].value("limits", nlohmann::json::object());
       limits.contains("gpu_copy_gb_per_s") || limits.contains("cpu_copy_gb_per_s")) {
     std::vector<std::string> rates;

@@ -68,7 +68,7 @@ struct PointPlan {
 // A lower bound on one frame's time, from the point's work model: its taps (every pass, the CoC pass
 // included) at a ceiling rate, above what any measured method reaches. CPU (the references, and
 // lavapipe, which runs on the CPU): 1e10 taps/s a thread, twice the fastest measured (naive's CPU
-// gather, ~5e9 taps/s a thread on a 2.1 GHz EPYC with AVX2; README, "Every method at its best");
+// gather, ~5e9 taps/s a thread on a 2.1 GHz EPYC with AVX2; results/README.md, "Every method at its best");
 // a hardware GPU: 1e13 taps/s. `threads`: the CPU threads the point runs on.
 struct FrameTimeFloor {
   double taps = 0, taps_per_s = 0, seconds = 0;

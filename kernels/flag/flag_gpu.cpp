@@ -134,7 +134,7 @@ const std::vector<std::string>& flag_layer_buffers() {
 // MiB) while a band still fills the device: 32 MiB (B = 64 rows at 1080p / 41x41 f16), a choice not
 // yet measured on a GPU. The floor keeps large patterns (4K / 81x81 f16: a 1.3 MB row, 2 n k = 80
 // rows already over either budget) from a dispatch pair per row. `memory --band-rows` lists the
-// rings, `buffers --band-rows` times them interleaved (README, "Streamed FLAG layers").
+// rings, `buffers --band-rows` times them interleaved (results/README.md, "Streamed FLAG layers").
 constexpr std::uint64_t kFlagStreamBudgetSoftware = 16ull << 20, kFlagStreamBudgetGpu = 32ull << 20;
 constexpr int kFlagStreamMinBand = 8;
 
