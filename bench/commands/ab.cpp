@@ -6,11 +6,7 @@
 
 #include <algorithm>
 
-#include <filesystem>
-
 #include "commands.hpp"
-#include "method.hpp"
-#include "package.hpp"
 #include "runner.hpp"
 #include "store.hpp"
 #include "compare.hpp"
@@ -22,7 +18,7 @@ namespace bokeh {
 namespace {
 
 struct AbOptions {
-  std::string baseline, candidate, sweep = "figure9 --quick --methods all", json_out, store;
+  std::string baseline, candidate, sweep = paired::kDefaultSweep, json_out, store;
   double threshold_pct = 5;
   paired::Options run;
 };
@@ -71,15 +67,7 @@ void run_ab(AbOptions& o) {
   // Before any measuring: a file that cannot be written fails now, not after the pairs (and never after a verdict).
   if (!o.json_out.empty()) check_writable_file(o.json_out);
   o.run.rule.threshold = o.threshold_pct / 100;
-  const bool packages = is_package_reference(o.baseline) || is_package_reference(o.candidate);
-  if (packages && o.sweep == AbOptions{}.sweep) o.sweep = "figure9 --quick";
-  o.run.sweep = paired::sweep_words(o.sweep);
-  if (packages) {
-    paired::use_packages(o.run, o.baseline, o.candidate);
-  } else {
-    o.run.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
-    o.run.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
-  }
+  paired::set_sides(o.run, o.baseline, o.candidate, o.sweep);
   const compare::Report report = paired::run(o.run);
   fmt::print("\n");
   if (!o.store.empty()) append_builds(report, o);

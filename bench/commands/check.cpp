@@ -90,11 +90,6 @@ std::string bytes_text(std::uint64_t bytes) {
                            : fmt::format("{:.1f} KiB ({} B)", static_cast<double>(bytes) / 1024, bytes);
 }
 
-std::size_t non_finite_values(const Image& image) {
-  return static_cast<std::size_t>(
-      std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
-}
-
 std::string ordinal(int n) {
   const int tens = n % 100, ones = n % 10;
   const char* suffix = (tens >= 11 && tens <= 13) ? "th" : ones == 1 ? "st" : ones == 2 ? "nd" : ones == 3 ? "rd" : "th";
@@ -261,7 +256,7 @@ class Checker {
     } catch (const std::exception& e) {
       return {Status::pass, fmt::format("refused: {}", e.what())};
     }
-    const std::size_t bad = non_finite_values(out);
+    const std::size_t bad = count_non_finite(out);
     const bool beyond_declared = which == "huge_color" && method_.input_limit && method_.input_limit(options_) < kHugeColor;
     if (bad == 0)
       return {Status::pass,
@@ -294,7 +289,7 @@ class Checker {
     const Scene s = make_scene("hoops", kFrameW, kFrameH);
     const Lens lens = lens_for(s);
     const Image out = run_gpu(ctx, method_, s.color, s.depth_m, lens, options_);
-    const std::size_t bad = non_finite_values(out);
+    const std::size_t bad = count_non_finite(out);
     return {bad == 0 ? Status::pass : Status::fail,
             fmt::format("hoops {}x{} on {} with robust buffer access: {} non-finite values", kFrameW, kFrameH,
                         ctx.info().name, bad),
@@ -415,7 +410,7 @@ class Checker {
     auto rmse_of = [&](const Method& m, FilterOptions o) {
       o.aperture = lens.aperture;
       const Image out = run_gpu(ctx, m, s.color, s.depth_m, lens, o);
-      return std::pair{compare_interior(out, reference, margin_px).rmse, non_finite_values(out)};
+      return std::pair{compare_interior(out, reference, margin_px).rmse, count_non_finite(out)};
     };
     FilterOptions own = options_;
     own.aperture = lens.aperture;

@@ -19,7 +19,6 @@
 
 #include "commands.hpp"
 #include "compare.hpp"
-#include "package.hpp"
 #include "paired.hpp"
 #include "report.hpp"
 #include "runner.hpp"
@@ -35,7 +34,7 @@ struct SelftestOptions {
   double threshold_pct = 5;  // what .ci/regression uses
   int max_pairs = paired::Options{}.max_pairs;
   double budget_s = paired::Options{}.budget_s;
-  std::string sweep = "figure9 --quick --methods all";
+  std::string sweep = paired::kDefaultSweep;
   std::string out = "results/selftest_compare.json";
 };
 
@@ -52,14 +51,7 @@ void selftest(const SelftestOptions& o) {
     conditions.push_back({fmt::format("one_{:g}", pct), pct, true});
   }
   paired::Options base;
-  const bool packages = is_package_reference(o.baseline) || is_package_reference(o.candidate);
-  base.sweep = paired::sweep_words(packages && o.sweep == SelftestOptions{}.sweep ? "figure9 --quick" : o.sweep);
-  if (packages) {
-    paired::use_packages(base, o.baseline, o.candidate);  // two versions of one's shader, in one process
-  } else {
-    base.baseline_exe = paired::bokehbench_in(o.baseline, "baseline");
-    base.candidate_exe = paired::bokehbench_in(o.candidate, "candidate");
-  }
+  paired::set_sides(base, o.baseline, o.candidate, o.sweep);  // two builds, or two versions of one's shader
   base.rule.threshold = o.threshold_pct / 100;
   base.max_pairs = o.max_pairs;
   base.budget_s = o.budget_s;

@@ -28,7 +28,8 @@ const char* metric_name(Metric metric) { return metric == Metric::wall ? "wall m
 namespace {
 // What a value of a series is: the harness's commit, and the package's version where the point is a
 // package's (an edit of the package at the same commit is a value of its own).
-std::string version_of(const SeriesValue& r) { return r.commit + '\n' + r.package; }
+std::string version_of(const std::string& commit, const std::string& package) { return commit + '\n' + package; }
+std::string version_of(const SeriesValue& r) { return version_of(r.commit, r.package); }
 }  // namespace
 
 std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metric metric) {
@@ -62,7 +63,7 @@ std::vector<CommitValue> over_commits(const std::vector<SeriesValue>& runs, Metr
     ends[version_of(r)].first.push_back(r.q1_ms), ends[version_of(r)].second.push_back(r.q3_ms);
   }
   for (auto& c : out) {
-    const std::string key = c.commit + '\n' + c.package;
+    const std::string key = version_of(c.commit, c.package);
     if (all_have[key]) {
       c.has_interval = true;
       c.q1_ms = quantile_of(ends[key].first, 0.5);

@@ -142,9 +142,14 @@ std::string bokehbench_in(const std::string& given, const std::string& role) {
   return std::filesystem::absolute(p).string();
 }
 
-// Two method packages (two versions of one's own shader), or a package and a built-in: this binary
-// serves the sweep over both in one worker process, the two alternating sample by sample (paired.hpp).
-void use_packages(Options& o, const std::string& baseline, const std::string& candidate) {
+void set_sides(Options& o, const std::string& baseline, const std::string& candidate, const std::string& sweep) {
+  if (!is_package_reference(baseline) && !is_package_reference(candidate)) {
+    o.sweep = sweep_words(sweep);
+    o.baseline_exe = bokehbench_in(baseline, "baseline");
+    o.candidate_exe = bokehbench_in(candidate, "candidate");
+    return;
+  }
+  o.sweep = sweep_words(sweep == kDefaultSweep ? "figure9 --quick" : sweep);
   const auto& builtins = registered_methods();
   for (const std::string* given : {&baseline, &candidate})
     if (!is_package_reference(*given) &&

@@ -59,10 +59,14 @@ struct Options {
 // The bokehbench to run for `given`: a build folder holding one, or a binary (absolute path). Throws
 // std::invalid_argument naming `role` and what is wrong.
 std::string bokehbench_in(const std::string& given, const std::string& role);
-// Two method packages (two versions of one's own shader), or a package and a built-in: this binary
-// serves the sweep (o.sweep, which must not name methods) over both in one worker process, the two
-// alternating sample by sample; sets the executables, the methods and the report's labels.
-void use_packages(Options& o, const std::string& baseline, const std::string& candidate);
+// The sweep `ab` and selftest-compare serve by default: every built-in method, quick.
+inline constexpr const char* kDefaultSweep = "figure9 --quick --methods all";
+// The two sides of a comparison and the sweep they serve (o.baseline_exe, candidate_exe, sweep, and
+// for packages package_methods and labels). Two builds: folders or binaries (bokehbench_in). Two method
+// packages (two versions of one's own shader), or a package and a built-in: this binary serves the
+// sweep over both in one worker process, the two alternating sample by sample; the sweep must not
+// name methods, and kDefaultSweep becomes figure9 --quick over the two.
+void set_sides(Options& o, const std::string& baseline, const std::string& candidate, const std::string& sweep);
 // A sweep command line ("figure9 --quick") as the words a worker is started with.
 std::vector<std::string> sweep_words(const std::string& command_line);
 
