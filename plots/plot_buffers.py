@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Plot results/buffers.json: FLAG's 3D buffer, memory against error, per resolution.
+"""Plot results/buffers.json: FLAG's 3D buffer (or a method's declared buffer scales), memory against error, per resolution.
 
 usage: plot_buffers.py BUFFERS_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT_PREFIX.svg)
 
@@ -17,6 +17,8 @@ full-res f32 FLAG's own error against it as horizontal lines: context for the to
 full-res FLAG carries the pattern of its k-px sample grid and the reduced pipelines do not.
 Bottom right: GPU time of the FLAG passes (downsample, bracket, horizontal, vertical, upsample: the
 frame without the CoC pass, which every configuration shares) vs buffer MiB at that resolution.
+A run with methods other than FLAG (`buffers --methods ./my_dof`) has no full-res f32 FLAG for them: its
+error panels read against the exact scatter, and a marker stands for a method and precision.
 """
 import sys
 
@@ -40,8 +42,16 @@ def mib(p):
     return p["memory"]["bytes"] / 2**20
 
 
-def rmse(p, reference="vs_flag_f32"):
-    return p["error"][reference]["rmse"]
+REFERENCE = "vs_flag_f32"  # main() reads against the exact scatter when a method other than FLAG is in the run
+
+
+def rmse(p, reference=None):
+    return p["error"][reference or REFERENCE]["rmse"]
+
+
+def filter_ms(p):
+    """The frame without the CoC pass (flag_passes_ms in results from before packages entered buffers)."""
+    return p["filter_passes_ms"] if "filter_passes_ms" in p else p["flag_passes_ms"]
 
 
 def rmse_floor(points):
@@ -66,15 +76,21 @@ def res_key(p):
 
 
 def main(doc, prefix):
+    global REFERENCE
     cfg = doc["config"]
     points, skipped = doc["points"], doc.get("skipped", [])
+    methods = list(dict.fromkeys(p["method"] for p in points))
+    flag_only = methods == ["flag"]
+    REFERENCE = "vs_flag_f32" if flag_only else "vs_energy_sum"
+    reference_text = "full-res f32 FLAG" if flag_only else "exact scatter (energy sum)"
+    key = (lambda p: p["precision"]) if len(methods) < 2 else (lambda p: f"{p['method']} {p['precision']}")
     resolutions = sorted({res_key(p) for p in points} | {res_key(s) for s in skipped}, key=lambda r: r[0] * r[1])
     if not resolutions:
         sys.exit("no points to plot")
     floor = rmse_floor(points)
     budgets = cfg.get("budget_lines_mib", [64, 16])
     largest_n = max(cfg["sizes"])
-    precisions = list(dict.fromkeys(p["precision"] for p in points))
+    precisions = list(dict.fromkeys(key(p) for p in points))
     scales = sorted({p["buffer_scale"] for p in points})
     MARKERS = bokehplot.markers_for(precisions)
     PRECISION_COLOURS = {name: plt.get_cmap("tab10")(i) for i, name in enumerate(precisions)}
@@ -88,7 +104,7 @@ def main(doc, prefix):
             err = rmse(p)
             colour = colour_of(p)
             filled = p["N"] == largest_n
-            ax.scatter(mib(p), err if err > 0 else floor, marker=MARKERS.get(p["precision"], "o"),
+            ax.scatter(mib(p), err if err > 0 else floor, marker=MARKERS.get(key(p), "o"),
                        s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2, zorder=3)
             if err == 0:
                 ax.annotate("exact", (mib(p), floor), fontsize=7, xytext=(3, 3),
@@ -103,10 +119,10 @@ def main(doc, prefix):
             ax.axvline(cfg["max_buffer_mb"], color="#d62728", ls="--", lw=0.8)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_title(f"{res[0]}x{res[1]}: error vs 3D-buffer size", fontsize=10)
-        ax.set_xlabel("FLAG buffers (MiB, driver's allocation)")
+        ax.set_title(f"{res[0]}x{res[1]}: error vs {'3D-' if flag_only else ''}buffer size", fontsize=10)
+        ax.set_xlabel("buffers (MiB, driver's allocation)")
         if i == 0:
-            ax.set_ylabel("RMSE vs full-res f32 FLAG (linear RGB)")
+            ax.set_ylabel(f"RMSE vs {reference_text} (linear RGB)")
         ax.grid(True, which="both", alpha=0.25)
     # Legend: markers = precision, colours = scale, fill = N.
     handles = [plt.Line2D([], [], ls="", marker=m, color="0.2", label=name) for name, m in MARKERS.items()
@@ -124,7 +140,7 @@ def main(doc, prefix):
     big = with_data[-1] if with_data else resolutions[-1]
     ax = fig.add_subplot(bottom[0, 0])
     def series(precision, scale):
-        return sorted((p for p in points if res_key(p) == big and p["precision"] == precision and p["buffer_scale"] == scale
+        return sorted((p for p in points if res_key(p) == big and key(p) == precision and p["buffer_scale"] == scale
                        and not streamed(p)),
                       key=lambda p: p["N"])
     for precision in precisions:
@@ -133,13 +149,14 @@ def main(doc, prefix):
             ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="-",
                     marker=MARKERS.get(precision, "o"), color=PRECISION_COLOURS.get(precision), label=f"{precision} 1/1")
     for scale, grey in ((2, "0.45"), (4, "0.7")):
-        pts = series("f32", scale)
-        if pts:
-            ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="--", marker=".",
-                    color=grey, label=f"f32 1/{scale} (resolution alone)")
+        for precision in (p for p in precisions if p.endswith("f32")):
+            pts = series(precision, scale)
+            if pts:
+                ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="--", marker=".",
+                        color=grey, label=f"{precision} 1/{scale} (resolution alone)")
     ax.set_yscale("log")
     ax.set_xlabel(f"gather size N ({spacing_text(points, cfg)} px; max CoC radius k(N-1)/2)")
-    ax.set_ylabel("RMSE vs full-res f32 FLAG")
+    ax.set_ylabel(f"RMSE vs {reference_text}")
     ax.set_title(f"{big[0]}x{big[1]}: error vs gather size (which precision fails first as radii grow)", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
     legend_if_labelled(ax, fontsize=7, ncol=2)
@@ -150,17 +167,17 @@ def main(doc, prefix):
     for p in exact_points:
         colour = colour_of(p)
         filled = p["N"] == largest_n
-        ax.scatter(mib(p), rmse(p, "vs_energy_sum"), marker=MARKERS.get(p["precision"], "o"),
+        ax.scatter(mib(p), rmse(p, "vs_energy_sum"), marker=MARKERS.get(key(p), "o"),
                    s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
     for p in exact_points:
-        if p["precision"] == "f32" and p["buffer_scale"] == 1:
+        if p["method"] == "flag" and p["precision"] == "f32" and p["buffer_scale"] == 1 and not streamed(p):
             ax.axhline(rmse(p, "vs_energy_sum"), color="0.3", ls="--" if p["N"] == largest_n else ":", lw=1,
                        label=f"full-res f32 FLAG, N = {p['N']}")
     for budget in budgets:
         ax.axvline(budget, color="0.3", ls=":", lw=1)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("FLAG buffers (MiB, driver's allocation)")
+    ax.set_xlabel("buffers (MiB, driver's allocation)")
     ax.set_ylabel("RMSE vs exact scatter (energy sum)")
     ax.set_title(f"{big[0]}x{big[1]}: error vs the exact scatter, for context", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
@@ -170,19 +187,19 @@ def main(doc, prefix):
     for p in (p for p in points if res_key(p) == big):
         colour = colour_of(p)
         filled = p["N"] == largest_n
-        ax.scatter(mib(p), p["flag_passes_ms"],
-                   marker=MARKERS.get(p["precision"], "o"),
+        ax.scatter(mib(p), filter_ms(p),
+                   marker=MARKERS.get(key(p), "o"),
                    s=42, color=colour if filled else "none", edgecolors=colour, linewidths=1.2)
     for budget in budgets:
         ax.axvline(budget, color="0.3", ls=":", lw=1)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("FLAG buffers (MiB, driver's allocation)")
-    ax.set_ylabel("GPU time of the FLAG passes (ms, medians; frame minus CoC)")
+    ax.set_xlabel("buffers (MiB, driver's allocation)")
+    ax.set_ylabel("GPU time of the filter passes (ms, medians; frame minus CoC)")
     ax.set_title(f"{big[0]}x{big[1]}: time vs buffer size (markers as above)", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
 
-    fig.suptitle(f"FLAG 3D buffer precision x scale, {cfg['scene']}, N {cfg['sizes']}, {spacing_text(points, cfg)}\n"
+    fig.suptitle(f"{'FLAG 3D buffer' if flag_only else ', '.join(methods) + ': buffer'} precision x scale, {cfg['scene']}, N {cfg['sizes']}, {spacing_text(points, cfg)}\n"
                  f"{bokehplot.context_line(doc)}", fontsize=9)
     bokehplot.save(fig, prefix)
 

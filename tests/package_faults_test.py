@@ -7,7 +7,7 @@ with a reason naming it, and every other point is measured and written.
   faulty_runaway      a pass that runs far past its estimate: the watchdog names the pass, the GPU
                       points after it are skipped (the device cannot be stopped), the run ends and
                       writes its results (exit 0) instead of hanging
-and, beside them, scaled_scratch: buffer_scales swept by tradeoff, its memory following the scale.
+and, beside them, scaled_scratch: buffer_scales swept by tradeoff and buffers, its memory following the scale.
 
 usage: package_faults_test.py BOKEHBENCH PACKAGES_DIR OUT_DIR
 """
@@ -53,16 +53,16 @@ naive = "naive/gpu/hoops/64x48/N:21/k:2/f32"
 expect(naive in measured or "ran past the watchdog" in skipped.get(naive, ""),
        f"the built-in is measured before the runaway, or skipped saying why after it: {measured} {skipped}")
 
-# Not a fault: a package declaring buffer_scales is swept at each by tradeoff, its declared memory following
-# the scale (ceil(64 / s) x ceil(48 / s) RGBA32F texels) and measured as allocated.
-run = subprocess.run([exe, "tradeoff", "-N", "21", "--resolutions", "64x48", "--budget-s", "1", "--processes", "1",
-                      "--no-plot", "--no-store", "--methods", str(packages / "scaled_scratch"), "--out-dir",
-                      str(out / "scales")], capture_output=True, text=True, timeout=240)
-assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
-doc = json.loads((out / "scales" / "tradeoff.json").read_text())
-scratch = {p["buffer_scale"]: p["memory"]["details"]["scratch_bytes"] for p in doc["points"]}
-expect(scratch == {s: -(-64 // s) * -(-48 // s) * 16 for s in (1, 2, 4)},
-       f"a package's buffer_scales are swept, its memory following the scale: {scratch}")
-expect(all(p["memory"]["allocated_bytes"] == p["memory"]["bytes"] for p in doc["points"]),
-       "declared memory = allocated at every scale")
-
+# Not a fault: a package declaring buffer_scales is swept at each by tradeoff and by buffers, its declared
+# memory following the scale (ceil(64 / s) x ceil(48 / s) RGBA32F texels) and measured as allocated.
+for command in ("tradeoff", "buffers"):
+    run = subprocess.run([exe, command, "-N", "21", "--resolutions", "64x48", "--budget-s", "1", "--processes", "1",
+                          "--no-plot", "--no-store", "--methods", str(packages / "scaled_scratch"), "--out-dir",
+                          str(out / command)], capture_output=True, text=True, timeout=240)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    doc = json.loads((out / command / f"{command}.json").read_text())
+    scratch = {p["buffer_scale"]: p["memory"]["details"]["scratch_bytes"] for p in doc["points"]}
+    expect(scratch == {s: -(-64 // s) * -(-48 // s) * 16 for s in (1, 2, 4)},
+           f"{command}: a package's buffer_scales are swept, its memory following the scale: {scratch}")
+    expect(all(p["memory"]["allocated_bytes"] == p["memory"]["bytes"] for p in doc["points"]),
+           f"{command}: declared memory = allocated at every scale")

@@ -1,7 +1,9 @@
 // `bokehbench buffers`: FLAG's 3D buffer at reduced precision and reduced resolution (the paper's
 // section 5: "Half resolution or quarter resolution 3D buffers could be used ... Further memory could
 // be saved by decreasing the precision"): memory, GPU frame time and error side by side, over
-// resolution x gather size x layer precision x buffer scale, measured interleaved. Each point's error
+// resolution x gather size x layer precision x buffer scale, measured interleaved. --methods takes any
+// other method that declares buffer scales (a package's manifest buffer_scales) in FLAG's place or
+// beside it. Each FLAG point's error
 // is reported against full-resolution f32 FLAG of the same scene (error.vs_flag_f32, CPU, computed in
 // strips once per resolution and size) and against the exact scatter (error.vs_energy_sum): full-res
 // FLAG carries the pattern of its k-px sample grid, which the reduced pipelines, sampling an s x s
@@ -31,7 +33,7 @@ namespace {
 struct BuffersOptions {
   AxisFlags axes;
   std::vector<double> budget_lines_mib = {64, 16};
-  std::vector<int> band_rows = {0};  // streamed points, one per band height (0: the device's auto)
+  std::vector<int> band_rows = {0};  // FLAG's streamed points, one per band height (0: the device's auto)
   SweepFlags sweep;
 };
 
@@ -60,20 +62,37 @@ nlohmann::json streamed_vs_full(const nlohmann::json& streamed, const nlohmann::
   return {{"frame_ms_ratio_median", ratio->estimate}, {"low", ratio->low}, {"high", ratio->high}, {"rounds", rounds}};
 }
 
+// The methods swept: each must declare a reduced buffer scale (else there is nothing to measure) and
+// every scale --scales names.
+std::vector<const Method*> buffer_methods(const AxisFlags& a) {
+  std::vector<const Method*> methods;
+  for (const auto& name : a.methods) {
+    const Method& m = find_method(name);
+    if (m.buffer_scales.size() < 2)
+      throw std::invalid_argument(fmt::format(
+          "buffers: {} has one buffer scale ({}): nothing reduced to measure (a package declares buffer_scales in its "
+          "manifest)", m.name, fmt::join(m.buffer_scales, ", ")));
+    for (int s : a.scales)
+      if (std::find(m.buffer_scales.begin(), m.buffer_scales.end(), s) == m.buffer_scales.end())
+        throw std::invalid_argument(fmt::format("--scales: {} has no buffer scale {} (it has {})", m.name, s,
+                                                fmt::join(m.buffer_scales, ", ")));
+    methods.push_back(&m);
+  }
+  return methods;
+}
+
 void buffers(BuffersOptions& o) {
   o.axes.resolve(&o.sweep);
-  const Method& flag = find_method("flag");
+  const std::vector<const Method*> methods = buffer_methods(o.axes);
+  const bool has_flag = std::any_of(methods.begin(), methods.end(), [](const Method* m) { return m->name == "flag"; });
   Axes axes;
-  axes.methods = {flag.name};
+  for (const Method* m : methods) axes.methods.push_back(m->name);
   axes.scenes = o.axes.scenes;
   axes.resolutions = o.axes.frame_sizes();
   axes.patterns = o.axes.patterns();
-  for (const auto& p : o.axes.precisions) layer_precision_from_string(p);
+  if (has_flag)
+    for (const auto& p : o.axes.precisions) layer_precision_from_string(p);
   axes.precisions = o.axes.precisions.empty() ? std::vector<std::string>{"all"} : o.axes.precisions;
-  for (int s : o.axes.scales)
-    if (std::find(flag.buffer_scales.begin(), flag.buffer_scales.end(), s) == flag.buffer_scales.end())
-      throw std::invalid_argument(fmt::format("--scales: FLAG has no buffer scale {} (it has {})", s,
-                                              fmt::join(flag.buffer_scales, ", ")));
   axes.scales = o.axes.scales.empty() ? std::vector<int>{0} : o.axes.scales;
   std::vector<int> sizes;
   for (const auto& p : axes.patterns) sizes.push_back(p.size_n);
@@ -91,14 +110,17 @@ void buffers(BuffersOptions& o) {
                          "332/42/5.2 MB for f16); memory.details.layer_buffer_bytes = vkGetImageMemoryRequirements of "
                          "the ceil(W/s) x ceil(H/s) x ceil(ceil(N/2)/s) 3D image; memory.bytes adds the bracket and "
                          "low-res buffers: what --max-buffer-mb is checked against"},
-              {"error_reference", "error.vs_flag_f32: CPU FLAG with f32 layers at full resolution, same scene, lens, N "
-                                  "and k (flag_blur: no layer buffer at any size)"},
+              {"methods", axes.methods},
+              {"error_reference", "error.vs_energy_sum: the exact scatter, every point; error.vs_flag_f32 (FLAG's "
+                                  "points): CPU FLAG with f32 layers at full resolution, same scene, lens, N and k "
+                                  "(flag_blur: no layer buffer at any size)"},
               {"band_rows", o.band_rows},
               {"streamed", "layer_buffer = streamed points: full resolution, each precision, one per band_rows (0: "
                            "auto); memory.details.streamed has the band and ring rows"}};
   const int threads = o.sweep.cpu_threads;
   s.extra_reference = [threads](const SweepPoint& p, const Scene& scene,
                                 const Lens& lens) -> std::optional<SweepSettings::ExtraReference> {
+    if (p.method->name != "flag") return std::nullopt;
     return SweepSettings::ExtraReference{
         "flag_f32", fmt::format("{}/{}x{}", p.resolution.text(), p.options.pattern.size_n, p.options.pattern.spacing_px), [&scene, lens, p, threads] {
           const CocInput coc = cpu_coc_pass(scene.color, scene.depth_m, lens, p.options.pattern);
@@ -113,7 +135,7 @@ void buffers(BuffersOptions& o) {
   s.derive = derive_buffers;  // reads the budget lines from config (as merge does)
   s.summary = [lines](const nlohmann::json& doc) {
     // Every point (and every skip) by frame: the memory / time / accuracy trade in one table.
-    fmt::print("\n{:<66} {:>10} {:>24} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms [95%]", "PSNR", "vs f32",
+    fmt::print("\n{:<66} {:>10} {:>24} {:>9} {:>10}  {}\n", "point", "MiB", "frame ms [95%]", "PSNR", "vs FLAG f32",
                "streamed/full [95%]");
     for (const auto& p : doc["points"]) {
       std::string ratio;
@@ -123,12 +145,12 @@ void buffers(BuffersOptions& o) {
                             p["streamed_vs_full"]["rounds"].get<int>());
       fmt::print("{:<66} {:>10.2f} {:>24} {:>9} {:>10}  {}\n", p["id"].get<std::string>(), allocated_mib(p),
                  interval_text(p["frame_ms_interval"], 2), psnr_text(p["error"]["vs_energy_sum"]),
-                 psnr_text(p["error"]["vs_flag_f32"]), ratio);
+                 psnr_text(p["error"].value("vs_flag_f32", nlohmann::json())), ratio);
     }
     for (const auto& sk : doc["skipped"])
       fmt::print("{:<66} skipped: {}\n", sk.value("id", std::string("?")), sk.value("reason", std::string()));
     for (double mib : lines) {
-      fmt::print("\nWithin {} MiB of FLAG buffers (fastest first):\n", mib);
+      fmt::print("\nWithin {} MiB of buffers (fastest first):\n", mib);
       std::vector<const nlohmann::json*> fit;
       for (const auto& p : doc["points"])
         if (allocated_mib(p) <= mib) fit.push_back(&p);
@@ -136,22 +158,31 @@ void buffers(BuffersOptions& o) {
         return (*a)["frame_ms"]["median"].template get<double>() < (*b)["frame_ms"]["median"].template get<double>();
       });
       for (const auto* p : fit)
-        fmt::print("  {:<58} {:8.2f} MiB  frame {} ms (FLAG passes {:8.2f})  PSNR vs f32 FLAG {}\n",
+        fmt::print("  {:<58} {:8.2f} MiB  frame {} ms (filter passes {:8.2f})  PSNR {}{}\n",
                    (*p)["id"].get<std::string>(), allocated_mib(*p), interval_text((*p)["frame_ms_interval"], 2),
-                   (*p)["flag_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_flag_f32"]));
+                   (*p)["filter_passes_ms"].get<double>(), psnr_text((*p)["error"]["vs_energy_sum"]),
+                   (*p)["error"].contains("vs_flag_f32")
+                       ? fmt::format(" (vs f32 FLAG {})", psnr_text((*p)["error"]["vs_flag_f32"]))
+                       : std::string());
     }
   };
   o.sweep.apply_shard(axes);
   std::vector<SweepPoint> points = expand(axes);
+  if (!has_flag) {
+    run_sweep(points, s);
+    return;
+  }
   // The streamed layers at full resolution, beside the full and reduced buffers, in the shard of the
   // full buffer they are compared with (streamed_vs_full).
   std::set<std::string> shard_keys;
   for (const auto& p : points) shard_keys.insert(shard_key(p.id, p.method->name, p.variant));
+  const Method& flag = find_method("flag");
   const OptionSpec* layer_buffer = flag.option("layer_buffer");
   const auto streamed = static_cast<double>(std::find(layer_buffer->choices.begin(), layer_buffer->choices.end(),
                                                       "streamed") - layer_buffer->choices.begin());
   for (int rows : o.band_rows) {
     Axes banded = axes;
+    banded.methods = {flag.name};
     banded.scales = {1};
     banded.shard_index = banded.shard_count = 1;
     banded.option_values = {{"layer_buffer", streamed}, {"band_rows", rows}};
@@ -175,22 +206,24 @@ void derive_buffers(nlohmann::json& doc) {
     p["fits_mib"] = nlohmann::json::array();
     for (double mib : lines)
       if (allocated_mib(p) <= mib) p["fits_mib"].push_back(mib);
-    double flag_ms = 0;  // the CoC pass is the same for every configuration of a resolution and N
+    double filter_ms = 0;  // the CoC pass is the same for every configuration of a resolution and N
     for (const auto& [pass, ms] : p["pass_ms"].items())
-      if (pass != "coc") flag_ms += ms.get<double>();
-    p["flag_passes_ms"] = flag_ms;
+      if (pass != "coc") filter_ms += ms.get<double>();
+    p["filter_passes_ms"] = filter_ms;
   }
 }
 
 void add_buffers_command(CLI::App& app) {
   auto o = std::make_shared<BuffersOptions>();
   auto* cmd = app.add_subcommand(
-      "buffers", "FLAG 3D buffer at reduced precision and resolution: memory, GPU time and error side by side");
+      "buffers", "FLAG 3D buffer (or a method package's declared buffer_scales) at reduced precision and resolution: "
+                 "memory, GPU time and error side by side");
   AxisFlags& a = o->axes;
   a.resolutions = {"800x600", "1280x720", "1920x1080", "3840x2160"};
   a.sizes = {"21", "41"};
-  a.scenes = {"hoops"};  // precisions and scales: every one FLAG has
-  a.add_to(cmd, {Axis::resolutions, Axis::sizes, Axis::precisions, Axis::scales}, {Axis::scenes});
+  a.scenes = {"hoops"};  // precisions and scales: every one each method has
+  a.methods = {"flag"};
+  a.add_to(cmd, {Axis::resolutions, Axis::sizes, Axis::precisions, Axis::scales, Axis::methods}, {Axis::scenes});
   cmd->add_option("--budget-lines", o->budget_lines_mib, "Memory budgets (MiB) to report and draw")
       ->check(finite_number())
       ->check(CLI::PositiveNumber);

@@ -49,6 +49,7 @@ double psnr_for_ranking(const nlohmann::json& metrics) {
 }
 
 std::string psnr_text(const nlohmann::json& metrics) {
+  if (metrics.is_null()) return "-";  // no such reference for this point
   const double psnr = psnr_for_ranking(metrics);
   return std::isinf(psnr) ? (psnr > 0 ? "exact" : "n/a") : fmt::format("{:.2f} dB", psnr);
 }
