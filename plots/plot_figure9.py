@@ -15,6 +15,7 @@ The other methods' figure has a log time axis, so that no curve flattens the res
 """
 
 import bokehplot
+import plot_roofline
 import matplotlib.pyplot as plt
 from matplotlib.ticker import NullLocator, ScalarFormatter
 
@@ -128,6 +129,7 @@ def main(doc, prefix):
         paper_figure(doc, prefix, backends, colours)
     if any(s["method"] not in PAPER for s in doc["series"]):
         methods_figure(doc, prefix, backends, colours)
+    plot_roofline.roofline_figure(doc, prefix + "_roofline")
 
 
 if __name__ == "__main__":

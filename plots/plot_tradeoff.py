@@ -13,6 +13,7 @@ labelled: for a time budget on the x axis, the best accuracy any configuration o
 import itertools
 
 import bokehplot
+import plot_roofline
 import matplotlib.pyplot as plt
 from matplotlib.lines import Line2D
 
@@ -96,6 +97,7 @@ def main(doc, prefix):
                  + (f", {unplaced} with non-finite output not shown" if unplaced else "")
                  + f"\n{bokehplot.context_line(doc)}", fontsize=9)
     bokehplot.save(fig, prefix)
+    plot_roofline.roofline_figure(doc, prefix + "_roofline")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Checks on a command's results file beyond its JSON schema: what the schema cannot say.
 
-usage: check_results.py gbench|adaptive|injected|intervals|figure9 FILE
+usage: check_results.py gbench|adaptive|injected|intervals|figure9|roofline FILE
 """
 import json
 import math
@@ -272,8 +272,33 @@ def figure9(d):
           sorted({s["time"] + " (" + s["backend"] + ")" for s in d["series"]}))
 
 
+def roofline(d):
+    """Each pass against the run's probes, recomputed from the point's median pass time, its declared work and the
+    probes' own medians (measurement.probes: bytes or FLOPs over the median ms), not from the limits written."""
+    probes = d["measurement"]["probes"]
+    def limit(name, per):
+        p = probes[name]
+        return p[per] / (p["ms"]["median"] * 1e-3)
+    checked = 0
+    for p in d["points"]:
+        b, passes = p["backend"], p["work"]["passes"]
+        copy_bytes_per_s, fma_flops_per_s = limit(f"{b}_copy", "bytes"), limit(f"{b}_fma", "flops")
+        for name, t in p["throughput"].items():
+            works = list(passes.values()) if name == "frame" else [passes[name]]
+            ms = p["frame_ms"]["median"] if name == "frame" else p["pass_ms"][name]
+            taps = sum(w["taps"] for w in works)
+            moved = sum(w["bytes_read"] + w["bytes_written"] for w in works)
+            assert close(t["fraction_of_copy_bandwidth"], moved / (ms * 1e-3) / copy_bytes_per_s), (p["id"], name, t)
+            assert close(t["fraction_of_fma_taps"], taps / (ms * 1e-3) / (fma_flops_per_s / 8)), (p["id"], name, t)
+            assert moved == 0 or close(t["taps_per_byte"], taps / moved), (p["id"], name, t)
+            checked += 1
+    assert checked, "no pass with a throughput"
+    print(checked, "passes' roofline fractions check against their work, times and the probes")
+
+
 if __name__ == "__main__":
-    checks = {"gbench": gbench, "adaptive": adaptive, "injected": injected, "intervals": intervals, "figure9": figure9}
+    checks = {"gbench": gbench, "adaptive": adaptive, "injected": injected, "intervals": intervals, "figure9": figure9,
+              "roofline": roofline}
     if len(sys.argv) != 3 or sys.argv[1] not in checks:
         sys.exit(__doc__)
     with open(sys.argv[2]) as f:

@@ -22,6 +22,7 @@
 #include "scene.hpp"
 #include "stats.hpp"
 #include "store.hpp"
+#include "roofline.hpp"
 #include "sweep.hpp"
 
 namespace bokeh {
@@ -647,7 +648,10 @@ void figure9(Figure9Options& o) {
     return out;
   };
   s.derive = derive_figure9;  // reads the targets from config (as merge does)
-  s.summary = print_summary;
+  s.summary = [](const nlohmann::json& doc) {
+    print_summary(doc);
+    print_roofline(doc);
+  };
   run_sweep(points, s);
 }
 

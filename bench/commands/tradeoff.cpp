@@ -11,6 +11,7 @@
 #include "report.hpp"
 #include "scene.hpp"
 #include "stats.hpp"
+#include "roofline.hpp"
 #include "sweep.hpp"
 
 namespace bokeh {
@@ -101,6 +102,7 @@ void tradeoff(TradeoffOptions& o) {
                      !first && t["low"].get<double>() <= faster_high ? "  as fast" : "");
           faster_high = t["high"].get<double>();
         }
+    print_roofline(doc);
   };
   o.sweep.apply_shard(axes);
   run_sweep(expand(axes), s);

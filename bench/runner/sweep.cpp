@@ -21,6 +21,7 @@
 #include "report.hpp"
 #include "paired.hpp"
 #include "processes.hpp"
+#include "roofline.hpp"
 #include "run.hpp"
 #include "store.hpp"
 #include "targets.hpp"
@@ -421,8 +422,7 @@ std::vector<CalibrationKernel> calibration_kernels(vk::Context* ctx, bool any_cp
   return calibration;
 }
 
-// The probes' times per round and the limits they give; each pass's bandwidth as a fraction of the
-// copy kernel's, measured in the same run.
+// The probes' times per round and the limits they give; each pass against them (roofline.hpp).
 void add_probes_and_limits(nlohmann::json& measurement, nlohmann::json& measured_points,
                            const std::vector<CalibrationKernel>& calibration, const runner::RunRecord& rec) {
   nlohmann::json probes = nlohmann::json::object(), limits = nlohmann::json::object();
@@ -439,12 +439,7 @@ void add_probes_and_limits(nlohmann::json& measurement, nlohmann::json& measured
     if (k.bytes > 0) limits[k.name + "_gb_per_s"] = k.bytes / (d.median * 1e6);
     if (k.flops > 0) limits[k.name + "_gflop_per_s"] = k.flops / (d.median * 1e6);
   }
-  for (auto& point : measured_points) {
-    const std::string limit = point["backend"].get<std::string>() + "_copy_gb_per_s";
-    if (!limits.contains(limit)) continue;
-    for (auto& [pass, t] : point["throughput"].items())
-      if (t.contains("gb_per_s")) t["fraction_of_copy_bandwidth"] = t["gb_per_s"].get<double>() / limits[limit].get<double>();
-  }
+  add_roofline(measured_points, limits);
   measurement["probes"] = probes;
   measurement["limits"] = limits;
 }
