@@ -74,9 +74,12 @@ FlagLayers flag_horizontal(const Image& packed, const GatherPattern& pattern, La
 // Output columns per row segment of the GPU horizontal pass's scan binning (horizontal_bins = scan,
 // shaders/flag/horizontal_scan.comp): each segment also reads the n samples either side of it, so
 // larger segments waste fewer loads: at N = 41 and 81 (800x600, k = 2) 256 columns took 0.81 and 0.75
-// of 64 columns' time. The difference array is SEGMENT vec3 per invocation whatever N, within what
-// lavapipe computes correctly (kSoftwareMaxBlockLayers in flag_gpu.cpp: wrong results past ~324).
-constexpr int kFlagScanSegment = 256;
+// of 64 columns' time, and 512 (a whole row of one phase at 800 px, k = 2: no halo) 0.976 [0.963,
+// 0.991] and 0.927 [0.918, 0.942] of 256's FLAG frame at N = 81 and 153 (`bokehbench ab`, alone;
+// results/roofline/scan_segment_512_ab.json). The difference array is SEGMENT vec3 per invocation
+// whatever N; the tests check the pass against its CPU mirror bit for bit across segments and at the
+// largest pattern (lavapipe computed wrong layers past ~324 vec3 of the bins' arrays, flag_gpu.cpp).
+constexpr int kFlagScanSegment = 512;
 // flag_horizontal's layers summed in the GPU scan binning's order, bit for bit (f32; the other
 // per-value precisions round the same f32 values): per row, lattice phase, segment of `segment`
 // columns at stride k and layer z, each sample whose disc reaches z adds itself at the start of its
