@@ -4,9 +4,15 @@ unsharded sweep: together the same set of points, each once; merged into one fil
 against the sweep schema and that compare reads; the store holds the three shard runs.
 
 usage: shard_test.py BOKEHBENCH WORKDIR SCHEMA_DIR VALIDATE_JSON_PY
+       shard_test.py auto BOKEHBENCH WORKDIR SHARD_FLAG EXPECTED_SHARD EXPECTED_SWEEP_ID
 
 A small CPU-only figure9 (naive and FLAG at N = 5, 9, 13: three pairs, one a shard), so that the four
 runs take seconds.
+
+auto: one shard run with --shard SHARD_FLAG (auto or auto/N) in the environment the caller set (a
+scheduler's variables, set by CTest through `cmake -E env`): its results say config.shard
+EXPECTED_SHARD and context.sweep_id EXPECTED_SWEEP_ID; the same task run again into the same store
+(a shard given twice) is kept as 'duplicate', with a warning naming the first run, and counted once.
 """
 import json
 import pathlib
@@ -81,7 +87,38 @@ def main(bokehbench, workdir, schema_dir, validate):
     print("store: the three shard runs")
 
 
+def auto_main(bokehbench, workdir, shard_flag, expected_shard, expected_sweep_id):
+    work = pathlib.Path(workdir)
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir(parents=True)
+    store = work / "store.sqlite"
+    sweep = [bokehbench, "figure9", "--quick", "--backends", "cpu", "--sizes", "5", "9", "13", "--width", "96",
+             "--height", "64", "--budget-s", "1", "--no-plot", "--cpu-threads", "1", "--reference-cache",
+             str(work / "cache"), "--shard", shard_flag, "--out-dir", str(work / "run"), "--store", str(store)]
+    run(sweep)
+    doc = json.loads((work / "run" / "figure9.json").read_text())
+    assert doc["config"].get("shard") == expected_shard, doc["config"].get("shard")
+    assert doc["context"].get("sweep_id") == expected_sweep_id, doc["context"].get("sweep_id")
+    assert doc["points"], f"shard {expected_shard} measured nothing"
+    print(f"--shard {shard_flag}: config.shard {expected_shard}, context.sweep_id {expected_sweep_id}")
+    # The same task again (a shard given twice): kept, marked, counted once.
+    done = run(sweep)
+    assert f"shard {expected_shard} of this sweep is already in the results store" in done.stderr, done.stderr
+    assert "(run 1)" in done.stderr, done.stderr
+    listed = run([bokehbench, "history", "list", "--store", str(store)]).stdout
+    rows = [line.split() for line in listed.splitlines()[2:] if line.strip()]  # after the count and the header
+    assert [(r[0], r[4], r[5]) for r in rows] == [("1", expected_shard, "complete"), ("2", expected_shard, "duplicate")], listed
+    point = doc["points"][0]["id"]
+    series = run([bokehbench, "history", "series", "--store", str(store), "--point", point]).stdout
+    values = [line.split() for line in series.splitlines()[2:] if line.strip()]
+    assert len(values) == 1 and values[0][-1] == "1", series  # one commit, of 1 run
+    print(f"the same shard twice: run 2 kept as duplicate, {point}'s series counts run 1 only")
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 5:
+    if len(sys.argv) == 7 and sys.argv[1] == "auto":
+        auto_main(*sys.argv[2:])
+    elif len(sys.argv) == 5:
+        main(*sys.argv[1:])
+    else:
         sys.exit(__doc__)
-    main(*sys.argv[1:])

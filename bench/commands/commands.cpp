@@ -296,7 +296,24 @@ void SweepFlags::add_to(CLI::App* cmd, double default_budget_s, double default_m
   cmd->add_option("--shard", shard,
                   "Measure shard i of n (1-based, e.g. 2/3): a share of the points, the points a command compares "
                   "kept together; run every shard (each its own machine or process) and join them with "
-                  "`bokehbench merge` or read them from one --store")
+                  "`bokehbench merge` or read them from one --store. auto: the scheduler's index, one line for "
+                  "every task: a Slurm array task (SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN + 1 of "
+                  "SLURM_ARRAY_TASK_COUNT); auto/N: N shards, for a Kubernetes indexed Job (JOB_COMPLETION_INDEX + 1 "
+                  "of N, N = its completions; Kubernetes gives no count) or a Slurm array of N tasks. Refused, "
+                  "before anything runs, where no index is set. The results' config.shard is the resolved i/n; a "
+                  "shard's context.sweep_id names its job (BOKEH_SWEEP_ID, else Slurm's SLURM_ARRAY_JOB_ID), and a "
+                  "store given the same shard of one job twice keeps the second as 'duplicate', counted nowhere")
+      ->transform(CLI::Validator(
+          [](std::string& text) {
+            if (text.rfind("auto", 0) != 0) return std::string();  // i/n: parse_shard checks it
+            try {
+              text = resolve_auto_shard(text);
+              return std::string();
+            } catch (const std::invalid_argument& e) {
+              return std::string(e.what());
+            }
+          },
+          "", "shard"))
       ->capture_default_str();
   cmd->add_option("--store", store,
                   "Results store the run is appended to: a file (SQLite) or postgresql://user@host/db (default: "

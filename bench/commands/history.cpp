@@ -3,12 +3,14 @@
 // (change-point detection on synthetic histories, the store's cost). `bokehbench merge`: shards into one
 // results file.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <random>
 #include <set>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -38,7 +40,7 @@ struct HistoryOptions {
   std::vector<std::string> steps = {"10:5", "20:10"};
   unsigned seed = 1;
   // cost
-  int runs = 1000;
+  int runs = 1000, writers = 1;
   std::string out_html;
 };
 
@@ -154,9 +156,13 @@ void import_files(const HistoryOptions& o) {
       fmt::print("{}: already in the store ({} of {} at {}), skipped\n", o.files[i], run.sweep, run.commit, run.date_utc);
       continue;
     }
-    const auto id = store->append_document(doc, "imported", run.source);
-    fmt::print("{}: run {} ({}, {}, {} points, {} headline figures)\n", o.files[i], id, run.sweep, run.commit,
-               history::points_of(doc).size(), history::headlines_of(doc).size());
+    std::int64_t duplicate_of = 0;
+    const auto id = store->append_document(doc, "imported", run.source, &duplicate_of);
+    fmt::print("{}: run {} ({}, {}, {} points, {} headline figures){}\n", o.files[i], id, run.sweep, run.commit,
+               history::points_of(doc).size(), history::headlines_of(doc).size(),
+               duplicate_of ? fmt::format("; shard {} of this sweep is already run {}: kept as '{}', counted once", run.shard,
+                                          duplicate_of, history::kDuplicateShard)
+                            : "");
   }
 }
 
@@ -354,12 +360,13 @@ void evaluate(const HistoryOptions& o) {
   }
 }
 
-// What the store costs: a real run appended --runs times (as commits c0001, ...), each append timed;
-// the store's size; then the HTML report over all of it, timed.
+// What the store costs: a real run appended --runs times (as commits c0000, ...), each append timed,
+// by one writer or by --writers at once (each a connection of its own, as shards finishing together
+// are); the store's size; then the HTML report over all of it, timed.
 void cost(const HistoryOptions& o) {
   if (o.files.size() != 1) throw std::invalid_argument("history cost: give one real run's results file (--from)");
   const nlohmann::json doc = compare::load_results(o.files[0]);
-  history::RunRow run = history::run_of(doc, "history cost", o.files[0]);
+  const history::RunRow run = history::run_of(doc, "history cost", o.files[0]);
   const auto points = history::points_of(doc);
   const auto headlines = history::headlines_of(doc);
   const bool sqlite = o.store.find("://") == std::string::npos;
@@ -367,20 +374,72 @@ void cost(const HistoryOptions& o) {
   if (sqlite && std::filesystem::exists(path))
     throw std::runtime_error(fmt::format("history cost: '{}' exists; give a new store (it is filled with synthetic runs)", o.store));
   auto store = Store::open(o.store, true);
+  if (!store->runs().empty())
+    throw std::runtime_error(fmt::format("history cost: '{}' already holds runs; give a new store (it is filled with "
+                                         "synthetic runs)",
+                                         o.store));
   const std::uint64_t empty_bytes = store->size_bytes();  // PostgreSQL's catalog, SQLite's empty tables
-  std::vector<double> append_ms;
-  for (int i = 0; i < o.runs; ++i) {
-    run.commit = fmt::format("c{:04d}", i);
-    run.date_utc = fmt::format("2000-01-{:02d}T{:02d}:{:02d}:00Z", 1 + i / 1440, i / 60 % 24, i % 60);
-    const auto t0 = std::chrono::steady_clock::now();
-    store->append(run, points, headlines);
-    append_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  const int writers = std::min(o.writers, o.runs);
+  // Run i is commit c{i}: writer w appends runs w, w + writers, ... so that together they append each once.
+  std::vector<std::vector<double>> append_ms(writers);
+  std::vector<std::string> errors(writers);
+  // Each writer's first append's start and last append's end: the elapsed time leaves out connecting.
+  using Clock = std::chrono::steady_clock;
+  std::vector<Clock::time_point> first_start(writers, Clock::time_point::max()), last_end(writers, Clock::time_point::min());
+  std::atomic<int> ready{0};
+  auto write = [&](int w) {
+    try {
+      std::unique_ptr<Store> own = writers == 1 ? nullptr : Store::open(o.store, true);  // its own connection
+      Store& s = writers == 1 ? *store : *own;
+      history::RunRow r = run;
+      ++ready;
+      while (ready.load() < writers) std::this_thread::yield();  // every writer connected before any appends
+      for (int i = w; i < o.runs; i += writers) {
+        r.commit = fmt::format("c{:04d}", i);
+        r.date_utc = fmt::format("2000-01-{:02d}T{:02d}:{:02d}:00Z", 1 + i / 1440, i / 60 % 24, i % 60);
+        const auto t0 = Clock::now();
+        s.append(r, points, headlines);
+        const auto t1 = Clock::now();
+        append_ms[w].push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+        first_start[w] = std::min(first_start[w], t0), last_end[w] = t1;
+      }
+    } catch (const std::exception& e) {
+      errors[w] = e.what();
+    }
+  };
+  if (writers == 1) {
+    write(0);
+  } else {
+    std::vector<std::thread> threads;
+    for (int w = 0; w < writers; ++w) threads.emplace_back(write, w);
+    for (auto& t : threads) t.join();
   }
-  std::sort(append_ms.begin(), append_ms.end());
+  for (int w = 0; w < writers; ++w)
+    if (!errors[w].empty()) throw std::runtime_error(fmt::format("history cost: writer {} of {}: {}", w + 1, writers, errors[w]));
+  std::vector<double> all_ms;
+  for (const auto& v : append_ms) all_ms.insert(all_ms.end(), v.begin(), v.end());
+  std::sort(all_ms.begin(), all_ms.end());
   fmt::print("{} runs of {} points ({} samples in the first) appended to {} ({}): write per run median {:.2f} ms, "
              "90th percentile {:.2f} ms\n",
              o.runs, points.size(), doc["points"].empty() ? 0 : doc["points"][0]["samples_ms"].size(), o.store, store->kind(),
-             append_ms[append_ms.size() / 2], append_ms[append_ms.size() * 9 / 10]);
+             all_ms[all_ms.size() / 2], all_ms[all_ms.size() * 9 / 10]);
+  if (writers > 1) {
+    // What the writers' load costs the store: its time per run (elapsed over runs, all writers together),
+    // and whether every run is there once (commit c{i} for every i, no other).
+    const double wall_ms = std::chrono::duration<double, std::milli>(*std::max_element(last_end.begin(), last_end.end()) -
+                                                                      *std::min_element(first_start.begin(), first_start.end()))
+                               .count();
+    std::set<std::string> commits;
+    std::size_t stored = 0;
+    for (const auto& r : store->runs()) commits.insert(r.commit), ++stored;
+    const bool every_run_once = stored == static_cast<std::size_t>(o.runs) && commits.size() == stored &&
+                                commits.count("c0000") && commits.count(fmt::format("c{:04d}", o.runs - 1));
+    fmt::print("{} writers at once: {:.2f} ms a run (elapsed {:.2f} s over {} runs); the store holds {} runs, {} distinct "
+               "commits: {}\n",
+               writers, wall_ms / o.runs, wall_ms / 1000, o.runs, stored, commits.size(),
+               every_run_once ? "every run once" : "RUNS LOST OR DUPLICATED");
+    if (!every_run_once) throw std::runtime_error("history cost: the store lost or duplicated runs under concurrent writers");
+  }
   store.reset();  // the last connection closing checkpoints SQLite's write-ahead log into the file
   store = Store::open(o.store, false);
   const std::uint64_t bytes = store->size_bytes();
@@ -453,6 +512,11 @@ void add_history_command(CLI::App& app) {
   cost_cmd->add_option("--from", o->files, "One real run's results file")->required()->check(CLI::ExistingFile);
   cost_cmd->add_option("--store", o->store, "A new store (file or postgresql:// URL) to fill")->required();
   cost_cmd->add_option("--runs", o->runs, "Runs to append")->check(CLI::Range(1, 1000000))->capture_default_str();
+  cost_cmd->add_option("--writers", o->writers,
+                       "Writers appending at once, each a connection (thread) of its own, as shards finishing together: "
+                       "also prints the time per run under that load (elapsed / runs) and checks every run is stored once")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   cost_cmd->add_option("--html", o->out_html, "Also write the report here");
   cost_cmd->callback([o] { cost(*o); });
 }

@@ -27,6 +27,38 @@ namespace {
 
 std::string shown(const std::string& url);
 
+// At most this many rows a multi-row INSERT: its parameters stay within PostgreSQL's limit (65,535)
+// whatever a run holds (a stability run's thousands of figures).
+constexpr std::size_t kRowsPerInsert = 500;
+
+}  // namespace
+
+// Multi-row INSERTs: a statement per table and not per row, since on PostgreSQL each statement is a
+// round trip to the server.
+void Connection::insert_rows(const std::string& table, const std::vector<std::string>& columns,
+                             const std::vector<std::vector<std::string>>& rows) {
+  std::string head = "INSERT INTO " + table + " (";
+  for (std::size_t k = 0; k < columns.size(); ++k) head += (k ? ", " : "") + columns[k];
+  head += ") VALUES ";
+  for (std::size_t first = 0; first < rows.size(); first += kRowsPerInsert) {
+    const std::size_t last = std::min(rows.size(), first + kRowsPerInsert);
+    std::string sql = head;
+    std::vector<std::string> params;
+    params.reserve((last - first) * columns.size());
+    for (std::size_t r = first; r < last; ++r) {
+      sql += r == first ? "(" : ", (";
+      for (std::size_t k = 0; k < columns.size(); ++k) {
+        params.push_back(rows[r].at(k));
+        sql += fmt::format("{}${}", k ? ", " : "", params.size());
+      }
+      sql += ")";
+    }
+    query(sql, params);
+  }
+}
+
+namespace {
+
 // ---- SQLite ----------------------------------------------------------------------------------------
 
 class SqliteConnection : public Connection {
@@ -59,10 +91,17 @@ class SqliteConnection : public Connection {
       sqlite3_stmt* s;
       ~Finalize() { sqlite3_finalize(s); }
     } finalize{stmt};
-    for (std::size_t i = 0; i < params.size(); ++i) {
-      const int index = sqlite3_bind_parameter_index(stmt, fmt::format("${}", i + 1).c_str());
-      if (index == 0) continue;
-      if (sqlite3_bind_text(stmt, index, params[i].c_str(), -1, SQLITE_TRANSIENT) != SQLITE_OK) fail("bind", sql);
+    // Each of the statement's parameters ($N, in the order SQLite numbers them) by its name: one pass,
+    // where looking each $N up by name (sqlite3_bind_parameter_index) scans them all, which a multi-row
+    // INSERT's hundreds of parameters make quadratic. Params the statement does not name are ignored.
+    for (int index = 1; index <= sqlite3_bind_parameter_count(stmt); ++index) {
+      const char* name = sqlite3_bind_parameter_name(stmt, index);
+      if (!name || name[0] != '$') continue;
+      const unsigned long n = std::strtoul(name + 1, nullptr, 10);
+      if (n < 1 || n > params.size()) continue;  // left NULL
+      if (sqlite3_bind_text(stmt, index, params[n - 1].c_str(), static_cast<int>(params[n - 1].size()), SQLITE_STATIC) !=
+          SQLITE_OK)
+        fail("bind", sql);
     }
     std::vector<Row> rows;
     for (;;) {
@@ -77,6 +116,33 @@ class SqliteConnection : public Connection {
       rows.push_back(std::move(row));
     }
     return rows;
+  }
+  // One prepared statement, bound and stepped per row: in-process calls cost no round trip, and a long
+  // VALUES list costs SQLite more to compile than it saves (history cost, a figure9 run: 0.8 ms so, 3.0 ms
+  // with VALUES lists, 1.6 ms with a statement prepared for each row).
+  void insert_rows(const std::string& table, const std::vector<std::string>& columns,
+                   const std::vector<std::vector<std::string>>& rows) override {
+    if (rows.empty()) return;
+    std::string sql = "INSERT INTO " + table + " (", values;
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+      sql += (k ? ", " : "") + columns[k];
+      values += fmt::format("{}${}", k ? ", " : "", k + 1);
+    }
+    sql += ") VALUES (" + values + ")";
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) fail("prepare", sql);
+    struct Finalize {
+      sqlite3_stmt* s;
+      ~Finalize() { sqlite3_finalize(s); }
+    } finalize{stmt};
+    for (const auto& row : rows) {
+      for (std::size_t k = 0; k < columns.size(); ++k)  // $1..$k appear in order: parameter k + 1 is $k+1
+        if (sqlite3_bind_text(stmt, static_cast<int>(k + 1), row.at(k).c_str(), static_cast<int>(row[k].size()),
+                              SQLITE_STATIC) != SQLITE_OK)
+          fail("bind", sql);
+      if (sqlite3_step(stmt) != SQLITE_DONE) fail("run", sql);
+      sqlite3_reset(stmt);
+    }
   }
   void begin_write() override { query("BEGIN IMMEDIATE"); }
   void commit() override { query("COMMIT"); }
@@ -195,6 +261,14 @@ std::vector<double> split(const std::string& text) {
   return out;
 }
 
+// FNV-1a, 64 bits: a digest that is the same on every machine and build (std::hash is not), for the
+// sweep identity's config and PostgreSQL's advisory lock key.
+std::uint64_t fnv1a64(const std::string& text) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
+  return h;
+}
+
 }  // namespace
 
 std::unique_ptr<Store> Store::open(const std::string& url, bool create) {
@@ -242,9 +316,10 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
   };
   has_headlines_ = version && has_table("headlines");
   has_packages_ = version && has_table("point_packages");
-  // Reading a store written before headline figures (or packages) were stored: it has none (nothing
-  // is changed in it).
-  if ((has_headlines_ && has_packages_) || (version && !create)) return;
+  has_shard_runs_ = version && has_table("shard_runs");
+  // Reading a store written before headline figures (or packages, or shard identities) were stored: it
+  // has none (nothing is changed in it).
+  if ((has_headlines_ && has_packages_ && has_shard_runs_) || (version && !create)) return;
   c.begin_write();
   try {
     // PostgreSQL: shards starting at once on an empty database create the tables once.
@@ -272,41 +347,68 @@ Store::Store(std::unique_ptr<Connection> connection, const std::string& url, boo
     // Likewise: a method package's content hash per point, so a series follows the package's edits.
     c.query("CREATE TABLE IF NOT EXISTS point_packages (run_id BIGINT NOT NULL REFERENCES runs(id), point_id TEXT NOT "
             "NULL, package TEXT NOT NULL, PRIMARY KEY (run_id, point_id))");
+    // Likewise: a shard run's sweep identity (RunRow::sweep_identity), so that a shard given twice is
+    // found (Store::append) without a column more in runs.
+    c.query("CREATE TABLE IF NOT EXISTS shard_runs (run_id BIGINT NOT NULL PRIMARY KEY REFERENCES runs(id), "
+            "identity TEXT NOT NULL)");
+    c.query("CREATE INDEX IF NOT EXISTS shard_runs_by_identity ON shard_runs (identity)");
     c.commit();
-    has_headlines_ = has_packages_ = true;
+    has_headlines_ = has_packages_ = has_shard_runs_ = true;
   } catch (...) {
     c.rollback();
     throw;
   }
 }
 
-std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& points, const std::vector<HeadlineRow>& headlines) {
+std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& points, const std::vector<HeadlineRow>& headlines,
+                           std::int64_t* duplicate_of) {
   if (!headlines.empty() && !has_headlines_)
     throw std::logic_error("results store opened for reading only: it cannot take headline figures");
   if (!has_packages_ && std::any_of(points.begin(), points.end(), [](const PointRow& p) { return !p.package.empty(); }))
     throw std::logic_error("results store opened for reading only: it cannot take method packages' hashes");
+  const bool shard_run = !run.shard.empty() && !run.sweep_identity.empty();
+  if (shard_run && !has_shard_runs_)
+    throw std::logic_error("results store opened for reading only: it cannot take shards' sweep identities");
+  if (duplicate_of) *duplicate_of = 0;
   Connection& c = *connection_;
   c.begin_write();
   try {
+    std::string status = run.status;
+    if (shard_run && status == "complete") {
+      // Writers of the same shard wait for each other here until the first commits (SQLite's BEGIN
+      // IMMEDIATE already admits one writer at a time), so the second always sees the first.
+      if (c.kind() == "postgresql")
+        c.query("SELECT pg_advisory_xact_lock($1)",
+                {std::to_string(static_cast<std::int64_t>(fnv1a64(run.sweep_identity + "\n" + run.shard)))});
+      const auto earlier = c.query("SELECT r.id FROM shard_runs s JOIN runs r ON r.id = s.run_id WHERE s.identity = $1 AND "
+                                   "r.shard = $2 AND r.status = 'complete' ORDER BY r.id LIMIT 1",
+                                   {run.sweep_identity, run.shard});
+      if (!earlier.empty()) {
+        status = kDuplicateShard;
+        if (duplicate_of) *duplicate_of = std::stoll(text(earlier[0][0]));
+      }
+    }
     const auto id_rows =
         c.query("INSERT INTO runs (commit_hash, date_utc, machine, sweep, status, shard, command, source, context) "
                 "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) RETURNING id",
-                {run.commit, run.date_utc, run.machine, run.sweep, run.status, run.shard, run.command, run.source, run.context});
+                {run.commit, run.date_utc, run.machine, run.sweep, status, run.shard, run.command, run.source, run.context});
     const std::string id = text(id_rows.at(0).at(0));
+    if (shard_run) c.query("INSERT INTO shard_runs (run_id, identity) VALUES ($1, $2)", {id, run.sweep_identity});
+    std::vector<std::vector<std::string>> point_rows, sample_rows, package_rows, headline_rows;
     for (const auto& p : points) {
-      c.query("INSERT INTO points (run_id, point_id, method, backend, median_ms, q1_ms, q3_ms, cpu_median_ms, settled) "
-              "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9)",
-              {id, p.point_id, p.method, p.backend, num(p.median_ms), num(p.q1_ms), num(p.q3_ms), num(p.cpu_median_ms),
-               p.settled ? "1" : "0"});
-      c.query("INSERT INTO samples (run_id, point_id, frame_ms, cpu_ms) VALUES ($1, $2, $3, $4)",
-              {id, p.point_id, join(p.samples_ms), join(p.samples_cpu_ms)});
-      if (!p.package.empty())
-        c.query("INSERT INTO point_packages (run_id, point_id, package) VALUES ($1, $2, $3)", {id, p.point_id, p.package});
+      point_rows.push_back({id, p.point_id, p.method, p.backend, num(p.median_ms), num(p.q1_ms), num(p.q3_ms),
+                            num(p.cpu_median_ms), p.settled ? "1" : "0"});
+      sample_rows.push_back({id, p.point_id, join(p.samples_ms), join(p.samples_cpu_ms)});
+      if (!p.package.empty()) package_rows.push_back({id, p.point_id, p.package});
     }
     for (const auto& h : headlines)
-      c.query("INSERT INTO headlines (run_id, name, unit, value, low, high, has_interval) VALUES ($1, $2, $3, $4, $5, $6, $7)",
-              {id, h.name, h.unit, num(h.value), num(h.low.value_or(h.value)), num(h.high.value_or(h.value)),
-               h.low && h.high ? "1" : "0"});
+      headline_rows.push_back({id, h.name, h.unit, num(h.value), num(h.low.value_or(h.value)), num(h.high.value_or(h.value)),
+                               h.low && h.high ? "1" : "0"});
+    c.insert_rows("points", {"run_id", "point_id", "method", "backend", "median_ms", "q1_ms", "q3_ms", "cpu_median_ms", "settled"},
+                point_rows);
+    c.insert_rows("samples", {"run_id", "point_id", "frame_ms", "cpu_ms"}, sample_rows);
+    c.insert_rows("point_packages", {"run_id", "point_id", "package"}, package_rows);
+    c.insert_rows("headlines", {"run_id", "name", "unit", "value", "low", "high", "has_interval"}, headline_rows);
     c.commit();
     return std::stoll(id);
   } catch (...) {
@@ -315,8 +417,9 @@ std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& point
   }
 }
 
-std::int64_t Store::append_document(const nlohmann::json& doc, const std::string& command, const std::string& source) {
-  return append(run_of(doc, command, source), points_of(doc), headlines_of(doc));
+std::int64_t Store::append_document(const nlohmann::json& doc, const std::string& command, const std::string& source,
+                                    std::int64_t* duplicate_of) {
+  return append(run_of(doc, command, source), points_of(doc), headlines_of(doc), duplicate_of);
 }
 
 std::vector<HeadlineRow> Store::headlines(std::int64_t run_id) {
@@ -466,7 +569,20 @@ RunRow run_of(const nlohmann::json& doc, const std::string& command, const std::
   run.command = command;
   run.source = source;
   run.context = context.dump();
+  run.sweep_identity = sweep_identity_of(doc);
   return run;
+}
+
+std::string sweep_identity_of(const nlohmann::json& doc) {
+  nlohmann::json config = doc.value("config", nlohmann::json::object());
+  if (!config.is_object() || !config.contains("shard") || !config["shard"].is_string()) return "";
+  config.erase("shard");
+  const nlohmann::json context = doc.value("context", nlohmann::json::object());
+  const std::string job = context.is_object() ? context.value("sweep_id", std::string()) : std::string();
+  // nlohmann's objects keep their keys sorted: the same config dumps the same text whatever wrote it.
+  return fmt::format("{} {} {} config:{:016x}", doc.value("schema", std::string()),
+                     context.is_object() ? context.value("git_commit", std::string("unknown")) : "unknown",
+                     job.empty() ? "-" : job, fnv1a64(config.dump()));
 }
 
 std::vector<PointRow> points_of(const nlohmann::json& doc) {
@@ -747,7 +863,18 @@ void widen_repeat_intervals(nlohmann::json& doc) {
 std::int64_t append_run(const std::string& url, const nlohmann::json& doc, const std::string& command) {
   try {
     auto store = Store::open(url, true);
-    const auto id = store->append_document(doc, command, "run");
+    std::int64_t duplicate_of = 0;
+    const auto id = store->append_document(doc, command, "run", &duplicate_of);
+    if (duplicate_of) {
+      // Not an error: the run is measured and kept, and the sweep's other shards go on; the scheduler's
+      // log says which task repeated which.
+      const std::string shard = doc["config"]["shard"].get<std::string>();
+      fmt::print(stderr, "warning: shard {} of this sweep is already in the results store {} (run {}): appended as run {} "
+                         "with status '{}', which series, reports and run-to-run spreads do not count (is --shard {} "
+                         "given to two tasks?)\n",
+                 shard, store->url(), duplicate_of, id, kDuplicateShard, shard);
+      return id;
+    }
     fmt::print("appended run {} ({}) to the results store {}\n", id, doc.value("status", "complete"), store->url());
     return id;
   } catch (const std::exception& e) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -139,6 +140,89 @@ std::pair<int, int> parse_shard(const std::string& text, const std::string& flag
   const int index = number(text.substr(0, slash)), count = number(text.substr(slash + 1));
   if (count < 1 || index < 1 || index > count) throw bad();
   return {index, count};
+}
+
+std::string resolve_auto_shard(const std::string& text, const std::function<const char*(const char*)>& env_or_null) {
+  const auto env = [&](const char* name) -> const char* {
+    const char* v = env_or_null ? env_or_null(name) : std::getenv(name);
+    return v && *v ? v : nullptr;
+  };
+  // A variable's whole value as a non-negative integer, or a message naming it.
+  const auto integer = [&](const char* name) -> std::optional<long> {
+    const char* v = env(name);
+    if (!v) return std::nullopt;
+    const std::string value = v;
+    if (value.size() > 9 || value.find_first_not_of("0123456789") != std::string::npos)
+      throw std::invalid_argument(fmt::format("{}: {}='{}' is not a non-negative integer", text, name, value));
+    return std::stol(value);
+  };
+  std::optional<long> given;  // auto/N
+  if (text != "auto") {
+    const std::string n = text.substr(std::min(text.size(), std::size_t{5}));
+    if (text.rfind("auto/", 0) != 0 || n.empty() || n.size() > 6 || n.find_first_not_of("0123456789") != std::string::npos ||
+        std::stol(n) < 1)
+      throw std::invalid_argument(fmt::format("'{}': give i/n, auto (a Slurm array) or auto/N (N shards: a "
+                                              "Kubernetes indexed Job's completions)",
+                                              text));
+    given = std::stol(n);
+  }
+  const auto slurm = integer("SLURM_ARRAY_TASK_ID");
+  const auto kubernetes = integer("JOB_COMPLETION_INDEX");
+  if (slurm && kubernetes)
+    throw std::invalid_argument(fmt::format("{}: both SLURM_ARRAY_TASK_ID (Slurm) and JOB_COMPLETION_INDEX "
+                                            "(Kubernetes) are set; give --shard i/n",
+                                            text));
+  long index = 0, count = 0;
+  if (slurm) {
+    const long min = integer("SLURM_ARRAY_TASK_MIN").value_or(1);
+    const auto listed = integer("SLURM_ARRAY_TASK_COUNT"), max = integer("SLURM_ARRAY_TASK_MAX");
+    const auto step = integer("SLURM_ARRAY_TASK_STEP");
+    // Task ids min..max, each a shard: a stepped (1-9:2) or listed (1,3,7) array's ids are not that.
+    if ((step && *step != 1) || (listed && max && *listed != *max - min + 1))
+      throw std::invalid_argument(fmt::format("{}: the Slurm array's task ids are not the consecutive {}..{} "
+                                              "(SLURM_ARRAY_TASK_COUNT={}, SLURM_ARRAY_TASK_STEP={}); give --shard i/n",
+                                              text, min, max.value_or(-1), listed.value_or(-1), step.value_or(1)));
+    index = *slurm - min + 1;
+    count = listed ? *listed : max ? *max - min + 1 : 0;
+    if (count == 0 && !given)
+      throw std::invalid_argument(fmt::format("{}: SLURM_ARRAY_TASK_ID={} but neither SLURM_ARRAY_TASK_COUNT nor "
+                                              "SLURM_ARRAY_TASK_MAX is set; give --shard auto/N",
+                                              text, *slurm));
+    if (count != 0 && given && *given != count)
+      throw std::invalid_argument(fmt::format("{}: the Slurm array has {} tasks (SLURM_ARRAY_TASK_COUNT or MAX), "
+                                              "not {}",
+                                              text, count, *given));
+    if (count == 0) count = *given;
+    if (index < 1 || index > count)
+      throw std::invalid_argument(fmt::format("{}: SLURM_ARRAY_TASK_ID={} with SLURM_ARRAY_TASK_MIN={} is task {} "
+                                              "of {}, not a shard of {}",
+                                              text, *slurm, min, index, count, count));
+  } else if (kubernetes) {
+    if (!given)
+      throw std::invalid_argument(fmt::format("auto: JOB_COMPLETION_INDEX={} (a Kubernetes indexed Job) gives no "
+                                              "count; give --shard auto/N, N the Job's completions",
+                                              *kubernetes));
+    index = *kubernetes + 1, count = *given;
+    if (index > count)
+      throw std::invalid_argument(fmt::format("{}: JOB_COMPLETION_INDEX={} (0-based) is not a shard of {}", text,
+                                              *kubernetes, count));
+  } else {
+    throw std::invalid_argument(fmt::format("{}: no scheduler index found: looked for SLURM_ARRAY_TASK_ID (a Slurm "
+                                            "array task) and JOB_COMPLETION_INDEX (a Kubernetes indexed Job); outside a "
+                                            "scheduler give --shard i/n",
+                                            text));
+  }
+  return fmt::format("{}/{}", index, count);
+}
+
+std::string scheduler_sweep_id(const std::function<const char*(const char*)>& env_or_null) {
+  const auto env = [&](const char* name) -> std::string {
+    const char* v = env_or_null ? env_or_null(name) : std::getenv(name);
+    return v ? v : "";
+  };
+  if (const std::string id = env("BOKEH_SWEEP_ID"); !id.empty()) return id;
+  if (const std::string job = env("SLURM_ARRAY_JOB_ID"); !job.empty()) return "slurm:" + job;
+  return "";
 }
 
 std::string shard_key(const std::string& id, const std::string& method, const std::string& variant) {
@@ -660,6 +744,10 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   if (ctx) ctx->watchdog_floor_s = s.watchdog_s;
   const bool any_cpu = std::any_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.backend == "cpu"; });
   nlohmann::json context = run_context(ctx ? &ctx->info() : nullptr);
+  // A shard's run says which scheduler job it belongs to: the store then tells a shard given twice in
+  // one job from the same shard of a later job (history::sweep_identity_of).
+  if (s.shard_count > 1)
+    if (const std::string id = scheduler_sweep_id(); !id.empty()) context["sweep_id"] = id;
   runner::Policy policy = s.policy;
   // Unless given: a GPU (not lavapipe) drops its clocks while the CPU references and other points run,
   // so each sample gets an untimed lead-in of a quarter sample first; lavapipe none.

@@ -60,6 +60,17 @@ struct Axes {
 
 // "i/n" with 1 <= i <= n (--shard, --process); throws std::invalid_argument naming the flag and the text.
 std::pair<int, int> parse_shard(const std::string& text, const std::string& flag = "--shard");
+// --shard auto or auto/N: the shard ("i/n") from the scheduler's index, so one command line serves
+// Slurm and Kubernetes. Slurm array task: SLURM_ARRAY_TASK_ID less SLURM_ARRAY_TASK_MIN (1 when unset)
+// plus 1, of SLURM_ARRAY_TASK_COUNT (or MAX - MIN + 1); a stepped or sparse array is refused.
+// Kubernetes indexed Job: JOB_COMPLETION_INDEX (0-based) plus 1, of N (the Job's completions: Kubernetes
+// gives no count). A given N must equal Slurm's count. Throws std::invalid_argument naming what it
+// looked for when it finds no index, or an index that is not a shard of N. `env` reads a variable
+// (nullptr when unset); when not given, std::getenv.
+std::string resolve_auto_shard(const std::string& text, const std::function<const char*(const char*)>& env = nullptr);
+// What a shard's run records as context.sweep_id (store.hpp, sweep_identity_of): BOKEH_SWEEP_ID when
+// set (a Kubernetes Job's uid, by the manifest), else "slurm:" + SLURM_ARRAY_JOB_ID, else "".
+std::string scheduler_sweep_id(const std::function<const char*(const char*)>& env = nullptr);
 // What stays together in one shard: a point's id less its method and variant, so the points a
 // command compares with each other (naive and FLAG at one N, adaptive off and on) are measured on
 // one machine, in the same rounds, and no ratio mixes two machines.

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <thread>
 
 #include <fmt/format.h>
@@ -482,6 +484,163 @@ TEST_P(StoreTest, ConcurrentWritersLoseNothing) {
   const auto runs = store->runs();
   ASSERT_EQ(runs.size(), static_cast<std::size_t>(kWriters * kRuns));
   for (const auto& r : runs) EXPECT_EQ(store->points(r.id).size(), 2u) << r.commit;
+}
+
+// 8 writers at once (8 shards finishing together), each with a connection of its own: every run is
+// stored once, none lost, none twice, each with all its rows.
+TEST_P(StoreTest, EightWritersAtOnceLoseAndDuplicateNothing) {
+  Store::open(url_, true);
+  constexpr int kWriters = 8, kRuns = 25;
+  std::vector<std::thread> writers;
+  std::atomic<int> failures{0}, ready{0};
+  for (int w = 0; w < kWriters; ++w)
+    writers.emplace_back([&, w] {
+      try {
+        auto store = Store::open(url_, true);
+        ++ready;
+        while (ready.load() < kWriters) std::this_thread::yield();  // all connected, then all append at once
+        for (int r = 0; r < kRuns; ++r)
+          store->append(a_run(fmt::format("w{}r{:02d}", w, r), "2026-01-01T00:00:00Z"), two_points(1),
+                        {{"f", "ratio", 1.5, 1.4, 1.6}});
+      } catch (const std::exception& e) {
+        ++failures;
+        ADD_FAILURE() << e.what();
+      }
+    });
+  for (auto& t : writers) t.join();
+  EXPECT_EQ(failures, 0);
+  auto store = Store::open(url_, false);
+  std::multiset<std::string> commits;
+  for (const auto& r : store->runs()) {
+    commits.insert(r.commit);
+    EXPECT_EQ(store->points(r.id).size(), 2u) << r.commit;
+    EXPECT_EQ(store->headlines(r.id).size(), 1u) << r.commit;
+  }
+  std::multiset<std::string> expected;
+  for (int w = 0; w < kWriters; ++w)
+    for (int r = 0; r < kRuns; ++r) expected.insert(fmt::format("w{}r{:02d}", w, r));
+  EXPECT_EQ(commits, expected);  // each exactly once
+  EXPECT_EQ(store->series("naive/gpu/x").size(), static_cast<std::size_t>(kWriters * kRuns));
+}
+
+// A run's rows go in batches (multi-row INSERTs of at most 500 rows on PostgreSQL): a run of more
+// points and figures than one batch holds reads back whole and exact.
+TEST_P(StoreTest, ARunLargerThanOneBatchReadsBackWhole) {
+  auto store = Store::open(url_, true);
+  std::vector<PointRow> points;
+  std::vector<HeadlineRow> headlines;
+  for (int i = 0; i < 1234; ++i) {
+    const double ms = 1 + i / 7.0;
+    points.push_back({fmt::format("p/{:04d}", i), "naive", "cpu", ms, ms - 0.5, ms + 0.5, 0, i % 2 == 0, {ms, ms / 3}, {},
+                      i % 3 == 0 ? fmt::format("hash{}", i) : ""});
+    headlines.push_back({fmt::format("h/{:04d}", i), "ratio", ms, std::nullopt, std::nullopt});
+  }
+  const auto id = store->append(a_run("c1", "2026-01-01T00:00:00Z"), points, headlines);
+  const auto back = store->points(id);
+  ASSERT_EQ(back.size(), points.size());
+  for (std::size_t i = 0; i < back.size(); ++i) {  // ordered by point id, as written
+    EXPECT_EQ(back[i].point_id, points[i].point_id);
+    EXPECT_NEAR(back[i].median_ms, points[i].median_ms, 1e-13 * points[i].median_ms);  // SQLite: REALs as 15 digits
+    EXPECT_EQ(back[i].samples_ms, points[i].samples_ms);  // bit for bit, 1/3 included
+    EXPECT_EQ(back[i].settled, points[i].settled);
+  }
+  EXPECT_EQ(store->headlines(id).size(), headlines.size());
+  EXPECT_EQ(store->series("p/1232").at(0).package, "");
+  EXPECT_EQ(store->series("p/1230").at(0).package, "hash1230");
+}
+
+// A shard's results document: shard `shard` ("i/n") of a figure9 sweep at commit abc, its one point
+// N:i and a probe figure; `job` is context.sweep_id (the scheduler's job; "" none).
+nlohmann::json shard_doc(const std::string& shard, const std::string& job, const std::string& status = "complete",
+                         bool quick = true) {
+  nlohmann::json context = {{"cpu_model", "EPYC"}, {"cpu_cores", 2}, {"date_utc", "2026-02-01T00:00:00Z"}, {"git_commit", "abc"}};
+  if (!job.empty()) context["sweep_id"] = job;
+  const std::string index = shard.substr(0, shard.find('/'));
+  return {{"schema", "bokehbench.figure9"},
+          {"status", status},
+          {"config", {{"quick", quick}, {"sizes", {5, 9}}, {"shard", shard}}},
+          {"context", context},
+          {"measurement", {{"probes", {{"cpu_copy", {{"ms", {{"median", 2.0}}}}}}}}},
+          {"points", {{{"id", "naive/cpu/N:" + index}, {"method", "naive"}, {"backend", "cpu"},
+                       {"frame_ms", {{"median", 1.0}, {"q1", 1.0}, {"q3", 1.0}}}, {"samples_ms", {1.0, 1.0, 1.0}}}}}};
+}
+
+// A shard given twice (two tasks with the same --shard) is kept, marked kDuplicateShard, and counted
+// nowhere: not in the point's series, not in the headline figures' series, not in the run-to-run
+// spread. The same shard of another job, another configuration, or after an interrupted first try
+// is a run of its own; a whole sweep run twice is two repeat runs as before.
+TEST_P(StoreTest, AShardGivenTwiceIsKeptButCountedOnce) {
+  auto store = Store::open(url_, true);
+  std::int64_t duplicate_of = -1;
+  const auto first = store->append_document(shard_doc("1/2", "slurm:7"), "c", "run", &duplicate_of);
+  EXPECT_EQ(duplicate_of, 0);
+  store->append_document(shard_doc("2/2", "slurm:7"), "c", "run", &duplicate_of);
+  EXPECT_EQ(duplicate_of, 0);
+  const auto second = store->append_document(shard_doc("1/2", "slurm:7"), "c", "run", &duplicate_of);
+  EXPECT_EQ(duplicate_of, first);
+  EXPECT_EQ(store->series("naive/cpu/N:1").size(), 1u);
+  EXPECT_EQ(store->series("naive/cpu/N:2").size(), 1u);
+  EXPECT_EQ(store->headline_series("probe/cpu_copy").size(), 2u);  // shards 1 and 2, once each
+  std::map<std::int64_t, std::string> status;
+  for (const auto& r : store->runs()) status[r.id] = r.status;
+  EXPECT_EQ(status.at(first), "complete");
+  EXPECT_EQ(status.at(second), kDuplicateShard);
+  // A third try of the same shard names the first, still the one counted.
+  store->append_document(shard_doc("1/2", "slurm:7"), "c", "run", &duplicate_of);
+  EXPECT_EQ(duplicate_of, first);
+  // Not duplicates: the same shard of a later job, of another configuration, of another count; a
+  // rerun after an interrupted try (which counted nowhere); with no job, the first of its kind.
+  for (const auto& doc : {shard_doc("1/2", "slurm:8"), shard_doc("1/2", "slurm:7", "complete", false), shard_doc("1/3", "slurm:7"),
+                          shard_doc("2/3", "k8s-uid", "interrupted"), shard_doc("2/3", "k8s-uid"), shard_doc("1/2", "")}) {
+    store->append_document(doc, "c", "run", &duplicate_of);
+    EXPECT_EQ(duplicate_of, 0) << doc["config"].dump() << doc["context"].value("sweep_id", "");
+  }
+  EXPECT_EQ(store->series("naive/cpu/N:1").size(), 5u);  // jobs 7, 8, 7 unquick, 7 of 3, none
+  // With no job, the same commit and configuration are one sweep: a second 1/2 is the duplicate.
+  store->append_document(shard_doc("1/2", ""), "c", "run", &duplicate_of);
+  EXPECT_NE(duplicate_of, 0);
+  // The whole sweep (no shard) twice: two repeat runs, both counted, as before shards were checked.
+  nlohmann::json whole = shard_doc("1/2", "slurm:7");
+  whole["config"].erase("shard");
+  store->append_document(whole, "c", "run", &duplicate_of);
+  EXPECT_EQ(duplicate_of, 0);
+  store->append_document(whole, "c", "run", &duplicate_of);
+  EXPECT_EQ(duplicate_of, 0);
+  EXPECT_EQ(store->series("naive/cpu/N:1").size(), 7u);
+  // The run-to-run spread reads complete runs only.
+  const auto spread = run_to_run_spread(*store, shard_doc("1/2", "slurm:7"), "figure9");
+  EXPECT_EQ(spread["earlier_runs"].get<int>(), 7);
+}
+
+// Two tasks given the same shard finishing at once: exactly one stays complete, whichever commits
+// first (the store serializes writers of one shard), and every shard of the sweep is counted once.
+TEST_P(StoreTest, EightTasksOfOneShardAtOnceCountOnce) {
+  Store::open(url_, true);
+  constexpr int kWriters = 8;
+  std::vector<std::thread> writers;
+  std::atomic<int> failures{0}, ready{0}, duplicates{0};
+  for (int w = 0; w < kWriters; ++w)
+    writers.emplace_back([&] {
+      try {
+        auto store = Store::open(url_, true);
+        ++ready;
+        while (ready.load() < kWriters) std::this_thread::yield();
+        std::int64_t duplicate_of = 0;
+        store->append_document(shard_doc("3/4", "slurm:9"), "c", "run", &duplicate_of);
+        if (duplicate_of) ++duplicates;
+      } catch (const std::exception& e) {
+        ++failures;
+        ADD_FAILURE() << e.what();
+      }
+    });
+  for (auto& t : writers) t.join();
+  EXPECT_EQ(failures, 0);
+  EXPECT_EQ(duplicates, kWriters - 1);
+  auto store = Store::open(url_, false);
+  const auto runs = store->runs();
+  ASSERT_EQ(runs.size(), static_cast<std::size_t>(kWriters));  // every try kept
+  EXPECT_EQ(std::count_if(runs.begin(), runs.end(), [](const RunRow& r) { return r.status == "complete"; }), 1);
+  EXPECT_EQ(store->series("naive/cpu/N:3").size(), 1u);
 }
 
 TEST_P(StoreTest, ANewerStoreIsRefusedAndKeptAsItWas) {
