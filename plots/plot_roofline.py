@@ -57,6 +57,8 @@ def panel(ax, doc, backend):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlim(x_lo, x_hi)
+    ys = [v[2] for s in series.values() for v in s] + ([fma_gflops * 1e9 / TAP_FLOPS] if fma_gflops else [])
+    ax.set_ylim(min(ys) / 3, max(ys) * 3)  # the points and the flat ceiling; the slanted one leaves the panel
     ax.set_xlabel("taps per byte moved (declared work)")
     ax.set_ylabel("taps a second")
     ax.set_title(f"{backend}: each pass against this run's probes (furthest from a ceiling first in the legend)",

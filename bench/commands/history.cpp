@@ -388,11 +388,12 @@ void cost(const HistoryOptions& o) {
   std::vector<Clock::time_point> first_start(writers, Clock::time_point::max()), last_end(writers, Clock::time_point::min());
   std::atomic<int> ready{0};
   auto write = [&](int w) {
+    bool counted = false;  // a writer that fails to connect still counts as ready: the others never wait forever
     try {
       std::unique_ptr<Store> own = writers == 1 ? nullptr : Store::open(o.store, true);  // its own connection
       Store& s = writers == 1 ? *store : *own;
       history::RunRow r = run;
-      ++ready;
+      ++ready, counted = true;
       while (ready.load() < writers) std::this_thread::yield();  // every writer connected before any appends
       for (int i = w; i < o.runs; i += writers) {
         r.commit = fmt::format("c{:04d}", i);
@@ -404,6 +405,7 @@ void cost(const HistoryOptions& o) {
         first_start[w] = std::min(first_start[w], t0), last_end[w] = t1;
       }
     } catch (const std::exception& e) {
+      if (!counted) ++ready;
       errors[w] = e.what();
     }
   };
