@@ -27,14 +27,19 @@ def run(cmd, ok=(0,)):
     return done
 
 
+def quick_sweep(bokehbench, work):
+    """The smallest figure9 with naive/FLAG pairs: CPU only, N = 5, 9, 13 at 96x64, one thread."""
+    return [bokehbench, "figure9", "--quick", "--backends", "cpu", "--sizes", "5", "9", "13", "--width", "96",
+            "--height", "64", "--budget-s", "1", "--no-plot", "--cpu-threads", "1", "--reference-cache",
+            str(work / "cache")]
+
+
 def main(bokehbench, workdir, schema_dir, validate):
     work = pathlib.Path(workdir)
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
     store = work / "shards.sqlite"
-    sweep = [bokehbench, "figure9", "--quick", "--backends", "cpu", "--sizes", "5", "9", "13", "--width", "96",
-             "--height", "64", "--budget-s", "1", "--no-plot", "--cpu-threads", "1", "--reference-cache",
-             str(work / "cache")]
+    sweep = quick_sweep(bokehbench, work)
     # The unsharded sweep first (it also fills the reference cache the shards share).
     run(sweep + ["--out-dir", str(work / "whole"), "--no-store"])
     unsharded = str(work / "whole" / "figure9.json")
@@ -92,9 +97,8 @@ def auto_main(bokehbench, workdir, shard_flag, expected_shard, expected_sweep_id
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
     store = work / "store.sqlite"
-    sweep = [bokehbench, "figure9", "--quick", "--backends", "cpu", "--sizes", "5", "9", "13", "--width", "96",
-             "--height", "64", "--budget-s", "1", "--no-plot", "--cpu-threads", "1", "--reference-cache",
-             str(work / "cache"), "--shard", shard_flag, "--out-dir", str(work / "run"), "--store", str(store)]
+    sweep = quick_sweep(bokehbench, work) + ["--shard", shard_flag, "--out-dir", str(work / "run"), "--store",
+                                             str(store)]
     run(sweep)
     doc = json.loads((work / "run" / "figure9.json").read_text())
     assert doc["config"].get("shard") == expected_shard, doc["config"].get("shard")

@@ -84,13 +84,17 @@ class SqliteConnection : public Connection {
   }
   ~SqliteConnection() override { sqlite3_close(db_); }
 
-  std::vector<Row> query(const std::string& sql, const std::vector<std::string>& params = {}) override {
+  // A compiled statement, finalised when it goes out of scope (also when a step throws).
+  using Statement = std::unique_ptr<sqlite3_stmt, decltype(&sqlite3_finalize)>;
+  Statement prepare(const std::string& sql) {
     sqlite3_stmt* stmt = nullptr;
     if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) fail("prepare", sql);
-    struct Finalize {
-      sqlite3_stmt* s;
-      ~Finalize() { sqlite3_finalize(s); }
-    } finalize{stmt};
+    return Statement(stmt, &sqlite3_finalize);
+  }
+
+  std::vector<Row> query(const std::string& sql, const std::vector<std::string>& params = {}) override {
+    const Statement statement = prepare(sql);
+    sqlite3_stmt* stmt = statement.get();
     // Each of the statement's parameters ($N, in the order SQLite numbers them) by its name: one pass,
     // where looking each $N up by name (sqlite3_bind_parameter_index) scans them all, which a multi-row
     // INSERT's hundreds of parameters make quadratic. Params the statement does not name are ignored.
@@ -129,12 +133,8 @@ class SqliteConnection : public Connection {
       values += fmt::format("{}${}", k ? ", " : "", k + 1);
     }
     sql += ") VALUES (" + values + ")";
-    sqlite3_stmt* stmt = nullptr;
-    if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) fail("prepare", sql);
-    struct Finalize {
-      sqlite3_stmt* s;
-      ~Finalize() { sqlite3_finalize(s); }
-    } finalize{stmt};
+    const Statement statement = prepare(sql);
+    sqlite3_stmt* stmt = statement.get();
     for (const auto& row : rows) {
       for (std::size_t k = 0; k < columns.size(); ++k)  // $1..$k appear in order: parameter k + 1 is $k+1
         if (sqlite3_bind_text(stmt, static_cast<int>(k + 1), row.at(k).c_str(), static_cast<int>(row[k].size()),
