@@ -17,7 +17,8 @@ build/bokehbench is the binary under test. Then:
               run's points, each once, pairs unsplit; the merged file validates, has the same points and
               its derived figures recomputed, and compare reads it; `history list` and `report` show the
               three shard runs, and each task's log names the run it appended, whose points in the store
-              are the ones its shard's file holds (which task measured which point).
+              are the ones its shard's file holds, as `history list --points` shows them under the task's job
+              (which task measured which point).
   duplicate   the same task run again in the same job (scontrol requeue ARRAY_2): the store never counts
               shard 2/3 twice (`history list` shows it once complete, the repeat marked, as 'duplicate';
               the series of its points count one run).
@@ -270,6 +271,7 @@ def check_recipe(r, bokehbench, schema_dir, validate):
     listing = run([bokehbench, "history", "list", "--store", r.store.url]).stdout
     log(listing.rstrip())
     assert "3 runs" in listing, listing
+    listed_points = points_listed(run([bokehbench, "history", "list", "--points", "--store", r.store.url]).stdout)
     runs = r.store.runs()
     report = r.work / "report.html"
     run([bokehbench, "report", "--store", r.store.url, "--out", str(report), "--plots-dir", str(r.work / "no_plots"),
@@ -285,8 +287,28 @@ def check_recipe(r, bokehbench, schema_dir, validate):
             f"the report's runs table has no row for run {run_id}, shard {i}/3"
         stored, in_file = r.store.points(run_id), sorted(p["id"] for p in r.shard_doc(i)["points"])
         assert stored == in_file, f"task {i}'s run {run_id} holds {stored}; its shard file {in_file}"
+        job, listed = listed_points[run_id]
+        assert job == f"slurm:{r.array}" and sorted(listed) == in_file, \
+            f"history list --points shows run {run_id} as job {job} with {listed}; expected slurm:{r.array}, {in_file}"
         log(f"task {r.array}_{i} -> run {run_id} (shard {i}/3): {', '.join(stored)}")
     log("history list and the report show the three shard runs; each task's points are its run's")
+
+
+def points_listed(listing):
+    """{run id: (job, [point ids])} from `history list --points`: each run's line, then its job and points indented."""
+    out, current = {}, None
+    for line in listing.splitlines():
+        head = re.match(r"^ +(\d+)  \d{4}-", line)
+        if head:
+            current = int(head.group(1))
+            out[current] = ("", [])
+        elif current is not None and line.startswith("       "):
+            text = line.strip()
+            if text.startswith("job "):
+                out[current] = (text[4:], out[current][1])
+            else:
+                out[current][1].append(text)
+    return out
 
 
 def check_duplicate(r, bokehbench):

@@ -32,6 +32,7 @@ using history::Store;
 struct HistoryOptions {
   std::string store = history::default_store_url("results");
   std::string point, sweep, metric = "wall", json_out;
+  bool list_points = false;  // list: each run's points and its scheduler job
   double max_p_value = 0.01;
   int permutations = 999, min_segment = 3;
   std::vector<std::string> files;
@@ -76,10 +77,18 @@ void list_runs(const HistoryOptions& o) {
   fmt::print("{} runs in {} ({})\n", runs.size(), o.store, store->kind());
   fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {:>7}  {}\n", "id", "date (UTC)", "commit", "sweep", "shard",
              "status", "points", "figures", "machine");
-  for (const auto& r : runs)
+  for (const auto& r : runs) {
+    const auto points = store->points(r.id);
     fmt::print("{:>5}  {:<20}  {:<14}  {:<9}  {:<6}  {:<11}  {:>6}  {:>7}  {}\n", r.id, r.date_utc, r.commit.substr(0, 14),
-               r.sweep, r.shard.empty() ? "all" : r.shard, r.status, store->points(r.id).size(), store->headlines(r.id).size(),
+               r.sweep, r.shard.empty() ? "all" : r.shard, r.status, points.size(), store->headlines(r.id).size(),
                r.machine);
+    if (!o.list_points) continue;
+    // Which task measured which point: a shard's run names its job (context.sweep_id, e.g. slurm:JOB).
+    const auto context = nlohmann::json::parse(r.context, nullptr, false);
+    const std::string job = context.is_object() ? context.value("sweep_id", std::string()) : std::string();
+    if (!job.empty()) fmt::print("       job {}\n", job);
+    for (const auto& p : points) fmt::print("       {}\n", p.point_id);
+  }
 }
 
 void print_series(const HistoryOptions& o) {
@@ -469,6 +478,8 @@ void add_history_command(CLI::App& app) {
 
   auto* list = cmd->add_subcommand("list", "The runs in the store, oldest first");
   add_store_option(list, *o);
+  list->add_flag("--points", o->list_points, "Under each run, the points it measured (and a shard's scheduler job): "
+                                             "which task measured which point");
   list->callback([o] { list_runs(*o); });
 
   auto* series = cmd->add_subcommand("series", "One point's series over commits, one per machine, with its change points");
