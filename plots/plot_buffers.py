@@ -42,11 +42,8 @@ def mib(p):
     return p["memory"]["bytes"] / 2**20
 
 
-REFERENCE = "vs_flag_f32"  # main() reads against the exact scatter when a method other than FLAG is in the run
-
-
-def rmse(p, reference=None):
-    return p["error"][reference or REFERENCE]["rmse"]
+def rmse(p, reference):
+    return p["error"][reference]["rmse"]
 
 
 def filter_ms(p):
@@ -54,8 +51,8 @@ def filter_ms(p):
     return p["filter_passes_ms"] if "filter_passes_ms" in p else p["flag_passes_ms"]
 
 
-def rmse_floor(points):
-    positive = [rmse(p) for p in points if rmse(p) > 0]
+def rmse_floor(points, reference):
+    positive = [rmse(p, reference) for p in points if rmse(p, reference) > 0]
     return min(positive) / 10 if positive else 1e-8
 
 
@@ -76,18 +73,18 @@ def res_key(p):
 
 
 def main(doc, prefix):
-    global REFERENCE
     cfg = doc["config"]
     points, skipped = doc["points"], doc.get("skipped", [])
     methods = list(dict.fromkeys(p["method"] for p in points))
     flag_only = methods == ["flag"]
-    REFERENCE = "vs_flag_f32" if flag_only else "vs_energy_sum"
+    # Full-res f32 FLAG is a reference for FLAG's points only: with another method, the exact scatter for all.
+    reference = "vs_flag_f32" if flag_only else "vs_energy_sum"
     reference_text = "full-res f32 FLAG" if flag_only else "exact scatter (energy sum)"
     key = (lambda p: p["precision"]) if len(methods) < 2 else (lambda p: f"{p['method']} {p['precision']}")
     resolutions = sorted({res_key(p) for p in points} | {res_key(s) for s in skipped}, key=lambda r: r[0] * r[1])
     if not resolutions:
         sys.exit("no points to plot")
-    floor = rmse_floor(points)
+    floor = rmse_floor(points, reference)
     budgets = cfg.get("budget_lines_mib", [64, 16])
     largest_n = max(cfg["sizes"])
     precisions = list(dict.fromkeys(key(p) for p in points))
@@ -101,7 +98,7 @@ def main(doc, prefix):
     for i, res in enumerate(resolutions):
         ax = fig.add_subplot(top[0, i])
         for p in (p for p in points if res_key(p) == res):
-            err = rmse(p)
+            err = rmse(p, reference)
             colour = colour_of(p)
             filled = p["N"] == largest_n
             ax.scatter(mib(p), err if err > 0 else floor, marker=MARKERS.get(key(p), "o"),
@@ -146,13 +143,13 @@ def main(doc, prefix):
     for precision in precisions:
         pts = series(precision, 1)
         if pts:
-            ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="-",
+            ax.plot([p["N"] for p in pts], [max(rmse(p, reference), floor) for p in pts], ls="-",
                     marker=MARKERS.get(precision, "o"), color=PRECISION_COLOURS.get(precision), label=f"{precision} 1/1")
     for scale, grey in ((2, "0.45"), (4, "0.7")):
         for precision in (p for p in precisions if p.endswith("f32")):
             pts = series(precision, scale)
             if pts:
-                ax.plot([p["N"] for p in pts], [max(rmse(p), floor) for p in pts], ls="--", marker=".",
+                ax.plot([p["N"] for p in pts], [max(rmse(p, reference), floor) for p in pts], ls="--", marker=".",
                         color=grey, label=f"{precision} 1/{scale} (resolution alone)")
     ax.set_yscale("log")
     ax.set_xlabel(f"gather size N ({spacing_text(points, cfg)} px; max CoC radius k(N-1)/2)")
