@@ -11,6 +11,8 @@ The paper's figure has one row per backend (GPU and CPU times differ by orders o
 real GPU, so each gets its own axes): frame time on linear axes, as in the paper; the same on log-log
 axes, where a power law is a straight line and the fitted exponent (legend) its slope; and naive /
 FLAG at each N. Markers are medians, bars and bands their 95% intervals (order statistics of the rounds).
+A CPU baseline (figure9 --cpu-baseline: OpenCV's cv::filter2D with one fixed disc, no CoC) is a dashed line
+on the GPU axes, in the GPU points' time, with FLAG / baseline in its legend label.
 The other methods' figure has a log time axis, so that no curve flattens the rest.
 """
 
@@ -45,6 +47,23 @@ def draw_curves(ax, doc, backend, methods, colours):
                     label=label(s, point))
 
 
+def draw_baselines(ax, doc, backend):
+    """The CPU baselines as dashed lines beside the GPU curves (their series are in the GPU points' time)."""
+    if backend != "gpu":
+        return
+    for s in doc.get("baseline_series", []):
+        b = next(x for x in doc["baselines"] if x["baseline"] == s["baseline"])
+        med = s["median_ms"]
+        lo = [m - low for m, low in zip(med, s["median_ms_low"])]
+        hi = [high - m for m, high in zip(med, s["median_ms_high"])]
+        ratios = [r for r in doc.get("flag_over_baseline", []) if r["baseline"] == s["baseline"]]
+        text = f"{b['label']} (CPU, {b['threads']} threads; fixed disc, no CoC)"
+        if ratios:
+            last = max(ratios, key=lambda r: r["N"])
+            text += f"; FLAG / {b['label']} {last['flag_over_baseline']:.2f}x at N={last['N']}"
+        ax.errorbar(s["N"], med, yerr=[lo, hi], color="tab:grey", ls="--", marker="s", ms=3, capsize=2, label=text)
+
+
 def size_axis(ax, cfg, log):
     ax.set_xlabel(f"gather size N (N x N samples at k = {cfg['spacing_px']} px)")
     ax.grid(True, which="both", alpha=0.3)
@@ -72,6 +91,7 @@ def paper_figure(doc, prefix, backends, colours):
     for row, backend in zip(axes, backends):
         for ax, log in zip(row[:2], (False, True)):
             draw_curves(ax, doc, backend, PAPER, colours)
+            draw_baselines(ax, doc, backend)
             size_axis(ax, cfg, log)
             ax.set_ylabel(f"frame time ({time_of(doc, backend)}, ms): median, 95% interval")
             if log:
@@ -110,6 +130,7 @@ def methods_figure(doc, prefix, backends, colours):
     fig, axes = plt.subplots(1, len(backends), figsize=(8 * len(backends), 5.5), constrained_layout=True, squeeze=False)
     for ax, backend in zip(axes[0], backends):
         draw_curves(ax, doc, backend, methods, colours)
+        draw_baselines(ax, doc, backend)
         size_axis(ax, cfg, False)
         ax.set_yscale("log")
         ax.yaxis.set_major_formatter(ScalarFormatter())

@@ -157,6 +157,23 @@ def headline_figures(d, lead, rounds):
     return out
 
 
+def baseline_figures(d, lead, rounds):
+    """FLAG (default options, GPU) over each CPU baseline at its N from `rounds` alone, both sides in the GPU
+    points' time (figure9 --cpu-baseline): {name: ("gpu", True, (estimate, low, high))}. Widened by a run's
+    processes like the headlines, but not pooled into their spread."""
+    software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
+    field = "samples_cpu_ms" if lead and software else "samples_ms"
+    by_round = lambda p: {r: ms for r, ms in zip(p["sample_rounds"], p[field]) if r in rounds}
+    flag = {p["N"]: by_round(p) for p in d["points"] if p["method"] == "flag" and not p.get("variant") and p["backend"] == "gpu"}
+    out = {}
+    for b in d.get("baselines", []):
+        base = by_round(b)
+        paired = [ms / base[r] for r, ms in flag.get(b["N"], {}).items() if r in base]
+        if paired:
+            out[f"FLAG/{b['baseline']} gpu N={b['N']}"] = ("gpu", True, median_interval(paired))
+    return out
+
+
 def widened_by_processes(d, lead):
     """A run of several processes (measurement.round_process): each headline figure's interval recomputed from
     the samples as derive_figure9 widens it. Per process, each figure from its rounds alone, with its standard
@@ -168,11 +185,14 @@ def widened_by_processes(d, lead):
     if not owner or max(owner) == 0:
         return {}, {}
     processes = max(owner) + 1
-    whole = headline_figures(d, lead, set(range(len(owner))))
-    parts = [headline_figures(d, lead, {r for r, k in enumerate(owner) if k == p}) for p in range(processes)]
+    every_round = set(range(len(owner)))
+    whole = headline_figures(d, lead, every_round)
+    widened = {**whole, **baseline_figures(d, lead, every_round)}
+    parts = [{**headline_figures(d, lead, rounds), **baseline_figures(d, lead, rounds)}
+             for rounds in ({r for r, k in enumerate(owner) if k == p} for p in range(processes))]
     scale = lambda ratio, x: math.log(x) if ratio else x
     pooled, stats = {}, {}
-    for name, (backend, ratio, _) in whole.items():
+    for name, (backend, ratio, _) in widened.items():
         estimates, variances = [], []
         for part in parts:
             if name in part:
@@ -185,12 +205,13 @@ def widened_by_processes(d, lead):
             continue
         n, mean_variance = len(estimates), sum(variances) / len(variances)
         mean = sum(estimates) / n
-        z2, dof = pooled.get(backend, (0.0, 0))
-        pooled[backend] = (z2 + sum((x - mean) ** 2 for x in estimates) / mean_variance, dof + n - 1)
+        if name in whole:  # the headlines alone make the spread
+            z2, dof = pooled.get(backend, (0.0, 0))
+            pooled[backend] = (z2 + sum((x - mean) ** 2 for x in estimates) / mean_variance, dof + n - 1)
         stats[name] = (n, mean_variance)
     out = {}
-    for name, (backend, ratio, (est, low, high)) in whole.items():
-        if name not in stats:
+    for name, (backend, ratio, (est, low, high)) in widened.items():
+        if name not in stats or backend not in pooled:
             continue
         z2, dof = pooled[backend]
         n, mean_variance = stats[name]
@@ -264,12 +285,52 @@ def figure9(d):
                 p = points[(s["method"], s["backend"], int(n))]
                 assert close(median, median_interval(p[field[s["time"]]])[0]), (s["method"], s["backend"], n)
     assert checked, "no naive/FLAG ratio to check"
+    baselines = check_baselines(d, field, software)
     owner = d["measurement"].get("round_process", [0])
     assert (max(owner) > 0) == (between > 0), "a run of several processes widens its figures by their spread"
     print(checked, "naive/FLAG ratios (", widened, "repeat-run intervals by the spread of earlier runs,", between,
           "figures widened by the spread between", max(owner) + 1, "processes ) and the curves' "
           "medians check against the samples, in",
-          sorted({s["time"] + " (" + s["backend"] + ")" for s in d["series"]}))
+          sorted({s["time"] + " (" + s["backend"] + ")" for s in d["series"]}), "; CPU baselines:", baselines)
+
+
+def check_baselines(d, field, software):
+    """figure9 --cpu-baseline filter2d (the default): a baseline for every N of the GPU points, measured or skipped
+    with its reason (a build without OpenCV); each FLAG (GPU) / baseline ratio recomputed from the samples of the
+    same rounds in the GPU points' time (process CPU time on a CPU device such as lavapipe), widened by a run's
+    processes as the headlines are, its repeat-run interval sqrt(2) wider; each baseline curve's medians from its
+    samples."""
+    if d["config"].get("cpu_baseline", "none") == "none":
+        assert not d.get("baselines") and not d.get("flag_over_baseline"), "no baseline was asked for"
+        return "none asked for"
+    gpu_n = sorted({p["N"] for p in d["points"] if p["backend"] == "gpu"})
+    measured = {b["N"]: b for b in d["baselines"]}
+    skipped = {b["N"]: b for b in d["skipped_baselines"]}
+    assert sorted(set(measured) | set(skipped)) == gpu_n, (sorted(measured), sorted(skipped), gpu_n)
+    for b in skipped.values():
+        assert b["reason"], b
+    flag_n = {p["N"] for p in d["points"] if p["method"] == "flag" and not p.get("variant") and p["backend"] == "gpu"}
+    checked = 0
+    for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
+        time = "process CPU time" if lead and software else "wall-clock time"
+        processes, _ = widened_by_processes(d, lead)
+        want = baseline_figures(d, lead, set(range(len(d["measurement"]["round_order"]))))
+        ratios = {r["N"]: r for r in figures["flag_over_baseline"]}
+        assert sorted(ratios) == sorted(flag_n & set(measured)), (sorted(ratios), flag_n, sorted(measured))
+        for n, r in ratios.items():
+            assert r["time"] == time and r["backend"] == "gpu", (r, time)
+            name = f"FLAG/{r['baseline']} gpu N={n}"
+            est, low, high = processes.get(name, want[name][2])
+            got = (r["flag_over_baseline"], r["low"], r["high"])
+            assert all(close(g, w, T_TABLE_CLOSE) for g, w in zip(got, (est, low, high))), (r, (est, low, high))
+            assert close(r["repeat_low"], est - math.sqrt(2) * (est - low), T_TABLE_CLOSE), r
+            assert close(r["repeat_high"], est + math.sqrt(2) * (high - est), T_TABLE_CLOSE), r
+            checked += 1
+        for s in figures["baseline_series"]:
+            assert s["time"] == time, (s, time)
+            for n, median in zip(s["N"], s["median_ms"]):
+                assert close(median, median_interval(measured[int(n)][field[time]])[0]), (s["baseline"], n)
+    return f"{len(measured)} measured, {len(skipped)} skipped, {checked} FLAG/baseline ratios check against the samples"
 
 
 def roofline(d):

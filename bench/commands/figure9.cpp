@@ -15,9 +15,11 @@
 #include <fmt/ranges.h>
 
 #include "commands.hpp"
+#include "cpu_baseline.hpp"
 #include "gather_pattern.hpp"
 #include "intervals.hpp"
 #include "method.hpp"
+#include "parallel.hpp"
 #include "report.hpp"
 #include "scene.hpp"
 #include "stats.hpp"
@@ -36,6 +38,7 @@ struct Figure9Options {
   double target_ratio_pct = 5;   // each naive/FLAG ratio's 95% interval within +-this % of it
   double target_exponent = 0.05;  // each growth exponent's 95% interval within +-this
   std::vector<std::string> sweep_choices;  // method options measured at every one of their choices
+  std::string cpu_baseline = "filter2d";    // filter2d: OpenCV's cv::filter2D beside FLAG (cpu_baseline.hpp); none
 };
 
 // Whether a backend's figures are taken in process CPU time: where the CPU does the work (the CPU
@@ -56,20 +59,27 @@ const char* time_name(bool cpu_time) { return cpu_time ? kProcessCpuTime : kWall
 struct RoundPoint {
   std::string method, variant, backend;  // variant: options off their defaults (sweep.cpp), "" for none
   int n = 0;
+  // A CPU baseline (method: its name, e.g. opencv_filter2d), no method: its figures are taken in the time
+  // of the GPU points it is set beside (cpu_time_leads of the GPU backend), so a ratio has one time.
+  bool baseline = false;
   bool cpu_time_leads = false;                  // its figures are in cpu_ms (cpu_time_leads())
   RoundValues wall_ms, cpu_ms;                   // the frame's wall-clock time; the process CPU time per frame
   std::map<std::string, RoundValues> pass_ms;   // GPU: per pass (Vulkan timestamps)
 };
 
-std::vector<RoundPoint> round_points(const nlohmann::json& points, const nlohmann::json& device) {
+// A results document's points, then its baselines (figure9's --cpu-baseline).
+std::vector<RoundPoint> round_points(const nlohmann::json& doc, const nlohmann::json& device) {
   std::vector<RoundPoint> out;
-  for (const auto& p : points) {
-    RoundPoint r{p["method"], p.value("variant", ""), p["backend"], p["N"].get<int>(),
+  for (const auto& p : doc["points"]) {
+    RoundPoint r{p["method"], p.value("variant", ""), p["backend"], p["N"].get<int>(), false,
                  cpu_time_leads(p["backend"], device), round_values(p), round_values(p, "samples_cpu_ms"), {}};
     for (const auto& [pass, values] : p["samples_pass_ms"].items())
       for (std::size_t s = 0; s < values.size(); ++s) r.pass_ms[pass][p["sample_rounds"][s].get<int>()] = values[s].get<double>();
     out.push_back(std::move(r));
   }
+  for (const auto& b : doc.value("baselines", nlohmann::json::array()))
+    out.push_back({b["baseline"], "", b["backend"], b["N"].get<int>(), true, cpu_time_leads("gpu", device),
+                   round_values(b), round_values(b, "samples_cpu_ms"), {}});
   return out;
 }
 
@@ -80,7 +90,7 @@ std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, cons
     const runner::PointRecord& rec = record.points[i];
     if (rec.samples.empty() || !rec.skipped.empty()) continue;
     RoundPoint r{points[i].method->name, points[i].variant, points[i].backend, points[i].options.pattern.size_n,
-                 cpu_time_leads(points[i].backend, device), {}, {}, {}};
+                 false, cpu_time_leads(points[i].backend, device), {}, {}, {}};
     for (std::size_t s = 0; s < rec.samples.size(); ++s) {
       r.wall_ms[rec.sample_round[s]] = rec.samples[s].frame_ms;
       r.cpu_ms[rec.sample_round[s]] = rec.samples[s].cpu_ms;
@@ -97,9 +107,11 @@ enum class Metric { lead, wall };
 // GPU first) the medians (with their points' median relative IQR) and the growth exponents over all
 // sizes and over the larger half (where fixed costs such as the CoC pass no longer dominate; per pass
 // too, on the GPU), and naive/FLAG at each N; `unsettled` lists the ratios and larger-half exponents
-// wider than the targets.
+// wider than the targets. The CPU baselines' curves and FLAG (GPU) / baseline at each N beside them:
+// reported with their intervals, never a target the run measures until.
 struct Figures {
   nlohmann::json series = nlohmann::json::array(), naive_over_flag = nlohmann::json::array();
+  nlohmann::json baseline_series = nlohmann::json::array(), flag_over_baseline = nlohmann::json::array();
   std::vector<std::string> unsettled;
   std::set<std::string> needed;  // point_key() of every point an unsettled figure is drawn from
   nlohmann::json between_processes;  // widen_by_processes(); null for a run of one process
@@ -199,18 +211,24 @@ std::vector<RoundPoint> rounds_of_process(const std::vector<RoundPoint>& points,
 // is relative) or an exponent.
 struct FigureAt {
   std::string backend;
-  bool ratio = false, headline = false;  // headline: a ratio or a larger-half exponent
-  nlohmann::json* at = nullptr;          // estimate (naive_over_flag or exponent), low, high
-  double estimate() const { return (*at)[ratio ? "naive_over_flag" : "exponent"].get<double>(); }
+  bool ratio = false, headline = false;  // headline: naive/FLAG or a larger-half exponent
+  nlohmann::json* at = nullptr;          // estimate (under `key`), low, high
+  const char* key = "exponent";          // naive_over_flag, flag_over_baseline or exponent
+  double estimate() const { return (*at)[key].get<double>(); }
   double scaled(double x) const { return ratio ? std::log(x) : x; }
   double unscaled(double x) const { return ratio ? std::exp(x) : x; }
 };
 
-std::map<std::string, FigureAt> figures_at(nlohmann::json& series, nlohmann::json& ratios) {
+std::map<std::string, FigureAt> figures_at(Figures& figures) {
   std::map<std::string, FigureAt> out;
-  for (auto& r : ratios)
-    out[fmt::format("naive/FLAG {} N={}", r["backend"].get<std::string>(), r["N"].get<int>())] = {r["backend"], true, true, &r};
-  for (auto& curve : series)
+  for (auto& r : figures.naive_over_flag)
+    out[fmt::format("naive/FLAG {} N={}", r["backend"].get<std::string>(), r["N"].get<int>())] = {
+        r["backend"], true, true, &r, "naive_over_flag"};
+  // Widened with the rest but not pooled into the spread: no headline, so a run's spread stays what it was.
+  for (auto& r : figures.flag_over_baseline)
+    out[fmt::format("FLAG/{} {} N={}", r["baseline"].get<std::string>(), r["backend"].get<std::string>(), r["N"].get<int>())] = {
+        r["backend"], true, false, &r, "flag_over_baseline"};
+  for (auto& curve : figures.series)
     for (const char* fit : {"larger_half", "all_sizes"})
       if (curve["fits"].contains(fit))
         out[fmt::format("{}{} {} {}", curve["method"].get<std::string>(), curve["variant"].get<std::string>(),
@@ -232,7 +250,7 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
 // processes drew adds, measured in this run. lambda near 1: the processes agreed as their rounds
 // predicted (the interval grows by t / 1.96 at most); above: they differed by more. Returns the pooled
 // spread per backend.
-nlohmann::json widen_by_processes(nlohmann::json& series, nlohmann::json& ratios, const std::vector<RoundPoint>& points,
+nlohmann::json widen_by_processes(Figures& whole_run, const std::vector<RoundPoint>& points,
                                   const std::vector<int>& round_process, Metric metric, bool headlines_only) {
   const int processes = round_process.empty() ? 0 : *std::max_element(round_process.begin(), round_process.end()) + 1;
   if (processes < 2) return nlohmann::json();
@@ -241,7 +259,7 @@ nlohmann::json widen_by_processes(nlohmann::json& series, nlohmann::json& ratios
   per_process.reserve(static_cast<std::size_t>(processes));
   for (int k = 0; k < processes; ++k) {
     per_process.push_back(figures(rounds_of_process(points, round_process, k), metric, 1, 1, headlines_only));
-    per_process_at.push_back(figures_at(per_process.back().series, per_process.back().naive_over_flag));
+    per_process_at.push_back(figures_at(per_process.back()));
   }
   struct Spread {
     double weighted_z2 = 0;
@@ -253,7 +271,7 @@ nlohmann::json widen_by_processes(nlohmann::json& series, nlohmann::json& ratios
   };
   std::map<std::string, Spread> by_backend;
   std::map<std::string, Estimates> by_figure;
-  for (auto& [name, whole] : figures_at(series, ratios)) {
+  for (auto& [name, whole] : figures_at(whole_run)) {
     Estimates e;
     for (auto& at : per_process_at) {
       const auto it = at.find(name);
@@ -279,7 +297,7 @@ nlohmann::json widen_by_processes(nlohmann::json& series, nlohmann::json& ratios
     by_figure[name] = std::move(e);
   }
   nlohmann::json out = nlohmann::json::object();
-  for (auto& [name, whole] : figures_at(series, ratios)) {
+  for (auto& [name, whole] : figures_at(whole_run)) {
     const auto e = by_figure.find(name);
     const auto s = by_backend.find(whole.backend);
     if (e == by_figure.end() || s == by_backend.end() || !(whole.estimate() > 0 || !whole.ratio)) continue;
@@ -316,25 +334,48 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
         const Method& m = *method;
         std::vector<const RoundPoint*> pts;
         for (const auto& p : points)
-          if (p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
+          if (!p.baseline && p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
         if (pts.empty()) continue;
         std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
         nlohmann::json curve = curve_json(pts, metric, headlines_only);
         curve.update({{"method", m.name}, {"variant", variant}, {"backend", backend}, {"time", time_of(*pts.front(), metric)}});
         out.series.push_back(std::move(curve));
       }
-  // The paper's comparison: both at their defaults.
+  // Each CPU baseline's curve, in the time of the GPU points it is set beside.
+  std::set<std::string> baselines;
+  for (const auto& p : points)
+    if (p.baseline) baselines.insert(p.method);
+  for (const std::string& name : baselines) {
+    std::vector<const RoundPoint*> pts;
+    for (const auto& p : points)
+      if (p.baseline && p.method == name) pts.push_back(&p);
+    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
+    nlohmann::json curve = curve_json(pts, metric, headlines_only);
+    curve.update({{"baseline", name}, {"backend", pts.front()->backend}, {"time", time_of(*pts.front(), metric)}});
+    out.baseline_series.push_back(std::move(curve));
+  }
+  // The paper's comparison: both at their defaults; and FLAG on the GPU against each CPU baseline at its N.
+  // Each over the rounds that hold both (a point leaves the rounds once its figures have settled).
   for (const auto& a : points) {
-    if (a.method != "naive" || !a.variant.empty()) continue;
+    if (a.baseline || a.method != "naive" || !a.variant.empty()) continue;
     for (const auto& b : points) {
-      if (b.method != "flag" || !b.variant.empty() || b.backend != a.backend || b.n != a.n) continue;
-      // Over the rounds that hold both (a point leaves the rounds once its figures have settled).
+      if (b.baseline || b.method != "flag" || !b.variant.empty() || b.backend != a.backend || b.n != a.n) continue;
       const Interval r = paired_ratio_interval(values_of(a, metric), values_of(b, metric)).value_or(Interval{});
       out.naive_over_flag.push_back({{"N", a.n}, {"backend", a.backend}, {"time", time_of(a, metric)},
                                      {"naive_over_flag", r.estimate}, {"low", r.low}, {"high", r.high}});
     }
   }
-  out.between_processes = widen_by_processes(out.series, out.naive_over_flag, points, round_process, metric, headlines_only);
+  for (const auto& a : points) {
+    if (a.baseline || a.method != "flag" || !a.variant.empty() || a.backend != "gpu") continue;
+    for (const auto& b : points) {
+      if (!b.baseline || b.n != a.n) continue;
+      const Interval r = paired_ratio_interval(values_of(a, metric), values_of(b, metric)).value_or(Interval{});
+      out.flag_over_baseline.push_back({{"N", a.n}, {"backend", a.backend}, {"baseline", b.method},
+                                        {"time", time_of(a, metric)}, {"flag_over_baseline", r.estimate},
+                                        {"low", r.low}, {"high", r.high}});
+    }
+  }
+  out.between_processes = widen_by_processes(out, points, round_process, metric, headlines_only);
   // Each figure's repeat-run interval, and which are wider than their targets (and the points they need).
   for (auto& curve : out.series)
     for (auto& [name, f] : curve["fits"].items()) {
@@ -349,6 +390,10 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
       for (int n : f["N"].get<std::vector<int>>())
         out.needed.insert(point_key(curve["method"], curve["variant"], curve["backend"], n));
     }
+  for (auto& r : out.flag_over_baseline) {  // reported, not a target
+    const Interval repeat = repeat_run({r["flag_over_baseline"], r["low"], r["high"]});
+    r.update({{"repeat_low", repeat.low}, {"repeat_high", repeat.high}});
+  }
   for (auto& r : out.naive_over_flag) {
     const Interval interval{r["naive_over_flag"], r["low"], r["high"]};
     const Interval repeat = repeat_run(interval);
@@ -405,7 +450,7 @@ void add_unclipped_fits(nlohmann::json& doc) {
 // The document's figures, each backend's in its time (cpu_time_leads), and the same in wall-clock time
 // (what a user waits for). The probes' drift says how steady the machine was.
 void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
-  const std::vector<RoundPoint> points = round_points(doc["points"], doc.at("context").value("device", nlohmann::json()));
+  const std::vector<RoundPoint> points = round_points(doc, doc.at("context").value("device", nlohmann::json()));
   const std::vector<int> round_process = doc["measurement"].value("round_process", std::vector<int>{});
   const Figures lead = figures(points, Metric::lead, target_ratio, target_exponent, false, round_process);
   const Figures wall = figures(points, Metric::wall, target_ratio, target_exponent, false, round_process);
@@ -430,6 +475,12 @@ void derive(nlohmann::json& doc, double target_ratio, double target_exponent) {
       {"stop_reason", doc["measurement"]["stop_reason"]},
       {"probe_drift", probe_drift(doc["measurement"])},
       {"wall_time", {{"series", wall.series}, {"naive_over_flag", wall.naive_over_flag}, {"unsettled", wall.unsettled}}}};
+  if (doc.contains("baselines")) {  // --cpu-baseline: measured, or skipped with the reason (skipped_baselines)
+    doc["baseline_series"] = lead.baseline_series;
+    doc["flag_over_baseline"] = lead.flag_over_baseline;
+    doc["headlines"]["wall_time"]["baseline_series"] = wall.baseline_series;
+    doc["headlines"]["wall_time"]["flag_over_baseline"] = wall.flag_over_baseline;
+  }
   if (!lead.between_processes.is_null())
     doc["headlines"]["between_processes"] = {
         {"why", "the run was measured by several processes one after another (measurement.round_process): each "
@@ -481,6 +532,42 @@ void print_repeat_basis(const nlohmann::json& measurement) {
              "commit pooled over a family of figures, to measure how far runs differ). Runs on a shared machine can "
              "differ by more than their rounds show: expect some repeat-run estimates outside these intervals\n",
              spread.value("earlier_runs", 0), degrees_of_freedom, needed);
+}
+
+// FLAG on the device over each CPU baseline at each N (--cpu-baseline), from same-round pairs as
+// naive / FLAG, with the baseline's own frame time; or why the baseline was not measured.
+void print_baselines(const nlohmann::json& doc) {
+  std::set<std::string> reasons;
+  for (const auto& b : doc.value("skipped_baselines", nlohmann::json::array()))
+    reasons.insert(fmt::format("{}: {}", b.value("label", b["baseline"].get<std::string>()), b["reason"].get<std::string>()));
+  for (const auto& reason : reasons) fmt::print("CPU baseline skipped, {}\n", reason);
+  if (!doc.contains("flag_over_baseline") || doc["baselines"].empty()) return;
+  const nlohmann::json& device = doc["context"]["device"];
+  const std::string on = device.is_object() ? device.value("name", "the GPU") : "the GPU";
+  const auto& wall = doc["headlines"]["wall_time"]["flag_over_baseline"];
+  for (std::size_t i = 0; i < doc["flag_over_baseline"].size(); ++i) {
+    const auto& r = doc["flag_over_baseline"][i];
+    const int n = r["N"].get<int>();
+    const auto b = std::find_if(doc["baselines"].begin(), doc["baselines"].end(),
+                                [&](const nlohmann::json& x) { return x["baseline"] == r["baseline"] && x["N"] == n; });
+    const auto curve = std::find_if(doc["baseline_series"].begin(), doc["baseline_series"].end(),
+                                    [&](const nlohmann::json& c) { return c["baseline"] == r["baseline"]; });
+    if (b == doc["baselines"].end() || curve == doc["baseline_series"].end()) continue;
+    const auto& ns = (*curve)["N"];
+    const auto at = static_cast<std::size_t>(std::find(ns.begin(), ns.end(), n) - ns.begin());
+    fmt::print("FLAG on {} / {} (CPU, {} threads) at N={:<3}: {:.2f}x [{:.2f}, {:.2f}]  a repeat run: [{:.2f}, {:.2f}]  "
+               "({} {:.2f} ms [{:.2f}, {:.2f}] in {})",
+               on, (*b)["label"].get<std::string>(), (*b)["threads"].get<int>(), n,
+               r["flag_over_baseline"].get<double>(), r["low"].get<double>(), r["high"].get<double>(),
+               r["repeat_low"].get<double>(), r["repeat_high"].get<double>(), (*b)["label"].get<std::string>(),
+               (*curve)["median_ms"][at].get<double>(), (*curve)["median_ms_low"][at].get<double>(),
+               (*curve)["median_ms_high"][at].get<double>(), r["time"].get<std::string>());
+    if (const auto& w = wall[i]; r["time"] == time_name(true))
+      fmt::print("  wall-clock: {:.2f}x [{:.2f}, {:.2f}]", w["flag_over_baseline"].get<double>(), w["low"].get<double>(),
+                 w["high"].get<double>());
+    fmt::print("\n");
+  }
+  fmt::print("  (above 1: FLAG is slower than the baseline, which filters the colour with one fixed disc, no CoC)\n");
 }
 
 // How far the run's processes put the figures apart, against what their rounds imply.
@@ -543,6 +630,7 @@ void print_summary(const nlohmann::json& doc) {
                  w["high"].get<double>());
     fmt::print("\n");
   }
+  print_baselines(doc);
   print_between_processes(doc["headlines"]);
   print_repeat_basis(doc["measurement"]);
   // The ratios move with the machine's memory speed (results/README.md, "Do two runs agree?"): say what it was.
@@ -580,6 +668,51 @@ void print_summary(const nlohmann::json& doc) {
              "narrows them\n", drift.empty() ? "not measured" : drift);
 }
 
+// One OpenCV filter2D baseline (cpu_baseline.hpp) per scene, frame size and pattern the sweep's GPU points
+// have (the comparison is FLAG on the device), visited with the GPU points of its N: taken from the points
+// this shard measures, so a shard's baselines are those its FLAG points are compared with. Skipped with the
+// reason in a build without OpenCV.
+std::vector<SweepSettings::Baseline> filter2d_baselines(const std::vector<SweepPoint>& points, const SweepSettings& s) {
+  const int threads = s.cpu_threads > 0 ? s.cpu_threads : default_cpu_threads();  // as the CPU references
+  std::vector<SweepSettings::Baseline> out;
+  std::set<std::string> ids;
+  for (const auto& p : points) {
+    if (p.backend != "gpu") continue;
+    const GatherPattern& pattern = p.options.pattern;
+    SweepSettings::Baseline b;
+    b.id = fmt::format("{}/cpu/{}/{}/N:{}/k:{}", baseline::kFilter2dName, p.scene, p.resolution.text(), pattern.size_n,
+                       pattern.spacing_px);
+    if (!ids.insert(b.id).second) continue;
+    const int side_px = baseline::disc_kernel_side_px(pattern);
+    b.identity = {{"id", b.id},
+                  {"baseline", baseline::kFilter2dName},
+                  {"label", "OpenCV filter2D"},
+                  {"description", "cv::filter2D of the scene's colour (RGB f32) with one fixed kernel, the pattern's "
+                                  "largest disc: the taps FLAG's gather takes at its largest radius, 1/area each, laid "
+                                  "out as one kernel_px x kernel_px kernel; no CoC, so no error is measured. Border: "
+                                  "constant 0, weights not renormalised (the exact reference's convention)"},
+                  {"backend", "cpu"},
+                  {"scene", p.scene},
+                  {"width_px", p.resolution.width_px},
+                  {"height_px", p.resolution.height_px},
+                  {"N", pattern.size_n},
+                  {"k", pattern.spacing_px},
+                  {"max_radius_px", pattern.max_radius_px()},
+                  {"kernel_px", side_px},
+                  {"kernel_taps", discrete_disc_area(pattern.max_radius_px(), pattern)},
+                  {"threads", threads},
+                  {"opencv", baseline::opencv_version()}};
+    b.scene = p.scene;
+    b.resolution = p.resolution;
+    b.skip = baseline::unavailable_reason();
+    b.visit_together = s.visit_together(p);
+    b.visit_block = s.visit_block(p);
+    b.prepare = [pattern, threads](const Scene& scene) { return baseline::filter2d_target(scene.color, pattern, threads); };
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
 void figure9(Figure9Options& o) {
   o.axes.resolve(&o.sweep);
   if (o.axes.quick && o.sweep.processes_option->count() == 0) o.sweep.processes = 1;  // a check of the mechanics
@@ -613,6 +746,7 @@ void figure9(Figure9Options& o) {
               {"precisions", axes.precisions},
               {"quick", o.axes.quick},
               {"target_ratio_pct", o.target_ratio_pct},
+              {"cpu_baseline", o.cpu_baseline},
               {"target_exponent", o.target_exponent},
               {"scene_coc", "lens f-stop set per N so the scene's largest CoC radius equals the pattern's max radius"},
               {"error", "each point's output against the exact scatter references (energy_sum: the plain sum naive and "
@@ -635,16 +769,25 @@ void figure9(Figure9Options& o) {
   // covered each other for 10 of 18). In a run of several processes, a later one sees the rounds of
   // those before it too (SweepSettings::run_out_dir), and the figures widened by their spread, as the
   // run's summary will give them.
-  s.points_needed = [&points, target_ratio, target_exponent](const runner::RunRecord& record,
-                                                              const nlohmann::json& context) {
-    if (record.round_order.size() < 10) return std::vector<bool>(points.size(), true);
+  if (o.cpu_baseline == "filter2d") s.baselines = filter2d_baselines(points, s);
+  // A baseline is measured as long as a GPU point at its N is (its ratio is not a target of its own), so
+  // that FLAG's rounds all have it beside them.
+  std::vector<int> baseline_n;
+  for (const auto& b : s.baselines) baseline_n.push_back(b.identity["N"].get<int>());
+  s.points_needed = [&points, baseline_n, target_ratio, target_exponent](const runner::RunRecord& record,
+                                                                         const nlohmann::json& context) {
+    if (record.round_order.size() < 10) return std::vector<bool>(points.size() + baseline_n.size(), true);
     const std::set<std::string> needed =
         figures(round_points(points, record, context.value("device", nlohmann::json())), Metric::lead, target_ratio,
                 target_exponent, true, record.round_process)
             .needed;
     std::vector<bool> out;
-    for (const auto& p : points)
+    std::set<int> gpu_needed;
+    for (const auto& p : points) {
       out.push_back(needed.count(point_key(p.method->name, p.variant, p.backend, p.options.pattern.size_n)) > 0);
+      if (out.back() && p.backend == "gpu") gpu_needed.insert(p.options.pattern.size_n);
+    }
+    for (int n : baseline_n) out.push_back(gpu_needed.count(n) > 0);
     return out;
   };
   s.derive = derive_figure9;  // reads the targets from config (as merge does)
@@ -685,6 +828,12 @@ void add_figure9_command(CLI::App& app) {
   cmd->add_option("--target-exponent", o->target_exponent,
                   "Measure until each growth exponent's 95% interval (larger half of N) is within +-this")
       ->check(finite_number())
+      ->capture_default_str();
+  cmd->add_option("--cpu-baseline", o->cpu_baseline,
+                  "A CPU filter timed beside FLAG in the same rounds, at each N of the GPU points: filter2d, OpenCV's "
+                  "cv::filter2D with the pattern's largest disc (no CoC; skipped, saying so, in a build without "
+                  "OpenCV), or none")
+      ->check(CLI::IsMember({"filter2d", "none"}))
       ->capture_default_str();
   cmd->add_option("--sweep-choices", o->sweep_choices,
                   "Method options (e.g. horizontal_bins) measured at every one of their choices, interleaved with the "

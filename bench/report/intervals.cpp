@@ -90,14 +90,17 @@ std::optional<Interval> paired_ratio_interval(const RoundValues& a, const RoundV
 }
 
 void add_median_intervals(nlohmann::json& doc) {
-  for (auto& point : doc["points"]) {
-    if (!point.contains("samples_ms") || point["samples_ms"].empty()) continue;
-    point["frame_ms_interval"] = interval_json(median_interval(round_values(point)));
-    nlohmann::json passes = nlohmann::json::object();
-    if (point.contains("samples_pass_ms"))
-      for (const auto& [pass, samples] : point["samples_pass_ms"].items())
-        passes[pass] = interval_json(median_interval(samples.get<std::vector<double>>()));
-    point["pass_ms_interval"] = passes;
+  for (const char* points : {"points", "baselines"}) {  // baselines: figure9's CPU baseline (SweepSettings::Baseline)
+    if (!doc.contains(points)) continue;
+    for (auto& point : doc[points]) {
+      if (!point.contains("samples_ms") || point["samples_ms"].empty()) continue;
+      point["frame_ms_interval"] = interval_json(median_interval(round_values(point)));
+      nlohmann::json passes = nlohmann::json::object();
+      if (point.contains("samples_pass_ms"))
+        for (const auto& [pass, samples] : point["samples_pass_ms"].items())
+          passes[pass] = interval_json(median_interval(samples.get<std::vector<double>>()));
+      point["pass_ms_interval"] = passes;
+    }
   }
 }
 

@@ -67,7 +67,7 @@ Interval median_interval(const RoundValues& values);
 // round.
 std::optional<Interval> paired_ratio_interval(const RoundValues& a, const RoundValues& b);
 
-// Every point of a sweep document gets `frame_ms_interval`: its median frame time with the 95%
+// Every point (and baseline) of a sweep document gets `frame_ms_interval`: its median frame time with the 95%
 // interval above, from its samples (one a round), and `pass_ms_interval`, the same for each timed
 // pass. Written when a sweep ends and by `merge`, so results measured before it gain them from
 // their samples.

@@ -30,7 +30,8 @@ nlohmann::json merge_shards(const std::vector<nlohmann::json>& docs, const std::
                                              "methods", "measurement", "points", "skipped", "elapsed_s"};
   nlohmann::json out;
   std::vector<bool> seen;
-  std::set<std::string> ids, machines;
+  std::set<std::string> ids, machines, baseline_ids;
+  nlohmann::json baselines = nlohmann::json::object();
   nlohmann::json shards = nlohmann::json::array(), points = nlohmann::json::array(), skipped = nlohmann::json::array();
   bool complete = true;
   double elapsed_s = 0;
@@ -76,6 +77,12 @@ nlohmann::json merge_shards(const std::vector<nlohmann::json>& docs, const std::
     }
     if (doc.contains("skipped"))
       for (const auto& p : doc["skipped"]) skipped.push_back(p);
+    // CPU baselines (figure9 --cpu-baseline), each from the shard that measured the GPU points of its N; one
+    // whose N's GPU points two shards share (e.g. split by precision) is kept from the first.
+    for (const char* key : {"baselines", "skipped_baselines"})
+      if (doc.contains(key))
+        for (const auto& b : doc[key])
+          if (baseline_ids.insert(b.value("id", "")).second) baselines[key].push_back(b);
     const std::string machine = history::machine_key(doc["context"]);
     machines.insert(machine);
     const std::string status = doc.value("status", "complete");
@@ -101,6 +108,9 @@ nlohmann::json merge_shards(const std::vector<nlohmann::json>& docs, const std::
     out["measurement"].erase("round_process");
   out["points"] = points;
   out["skipped"] = skipped;
+  for (const char* key : {"baselines", "skipped_baselines"})
+    if (std::any_of(docs.begin(), docs.end(), [&](const nlohmann::json& d) { return d.contains(key); }))
+      out[key] = baselines.value(key, nlohmann::json::array());
   out["status"] = complete ? "complete" : "partial";
   out["elapsed_s"] = elapsed_s;  // the shards ran side by side: the longest
   out["shards"] = shards;

@@ -70,22 +70,27 @@ runner::RunRecord record_of(const nlohmann::json& doc, const std::map<std::strin
     rec.probe_ms[name] = probe.at("ms_per_round").get<std::vector<double>>();
     rec.probe_cpu_ms[name] = probe.at("cpu_ms_per_round").get<std::vector<double>>();
   }
-  for (const auto& p : doc.at("points")) {
-    runner::PointRecord& r = rec.points[index_of.at(p.at("id").get<std::string>())];
-    const auto& frame = p.at("samples_ms");
-    for (std::size_t s = 0; s < frame.size(); ++s) {
-      runner::Sample sample{frame[s].get<double>(), {}, p.at("samples_cpu_ms")[s].get<double>()};
-      for (const auto& [pass, values] : p.at("samples_pass_ms").items()) sample.pass_ms[pass] = values[s].get<double>();
-      r.samples.push_back(std::move(sample));
-      r.sample_round.push_back(p.at("sample_rounds")[s].get<int>());
+  // The sweep's points, then its baselines (SweepSettings::Baseline: the same samples, no passes).
+  const nlohmann::json none = nlohmann::json::array();
+  for (const char* measured : {"points", "baselines"})
+    for (const auto& p : doc.value(measured, none)) {
+      runner::PointRecord& r = rec.points[index_of.at(p.at("id").get<std::string>())];
+      const auto& frame = p.at("samples_ms");
+      const nlohmann::json passes = p.value("samples_pass_ms", nlohmann::json::object());
+      for (std::size_t s = 0; s < frame.size(); ++s) {
+        runner::Sample sample{frame[s].get<double>(), {}, p.at("samples_cpu_ms")[s].get<double>()};
+        for (const auto& [pass, values] : passes.items()) sample.pass_ms[pass] = values[s].get<double>();
+        r.samples.push_back(std::move(sample));
+        r.sample_round.push_back(p.at("sample_rounds")[s].get<int>());
+      }
+      r.warm_up_ms = p.at("warm_up_ms").get<std::vector<double>>();
+      r.frames_per_sample = p.at("frames_per_sample").get<int>();
+      r.wall_s = p.value("measure_wall_s", 0.0);
+      r.settled = p.value("settled", false);
     }
-    r.warm_up_ms = p.at("warm_up_ms").get<std::vector<double>>();
-    r.frames_per_sample = p.at("frames_per_sample").get<int>();
-    r.wall_s = p.value("measure_wall_s", 0.0);
-    r.settled = p.value("settled", false);
-  }
-  const nlohmann::json skipped = doc.value("skipped", nlohmann::json::array());
-  for (const auto& p : skipped) rec.points[index_of.at(p.at("id").get<std::string>())].skipped = p.value("reason", "skipped");
+  for (const char* skipped : {"skipped", "skipped_baselines"})
+    for (const auto& p : doc.value(skipped, none))
+      rec.points[index_of.at(p.at("id").get<std::string>())].skipped = p.value("reason", "skipped");
   return rec;
 }
 

@@ -352,6 +352,21 @@ PointInfo info_of(const nlohmann::json& point) {
           point.value("counters", nlohmann::json::object()), point.value("stats", nlohmann::json::object())};
 }
 
+// What a measured point or baseline's samples say, in the fields both have.
+nlohmann::json samples_json(const runner::PointRecord& rec) {
+  const std::vector<double> frame = rec.frame_ms();
+  const runner::Distribution d = runner::distribution(frame);
+  return {{"frame_ms", distribution_json(d)},
+          {"relative_iqr", d.relative_iqr()},
+          {"samples_ms", frame},
+          {"samples_cpu_ms", rec.cpu_ms()},
+          {"sample_rounds", rec.sample_round},
+          {"frames_per_sample", rec.frames_per_sample},
+          {"warm_up_ms", rec.warm_up_ms},
+          {"settled", rec.settled},
+          {"measure_wall_s", rec.wall_s}};
+}
+
 // The one serialisation of a measured point.
 nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, const PointInfo& info) {
   std::vector<double> frame = rec.frame_ms();
@@ -377,18 +392,10 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
                            {"gb_per_s", bytes / (d.median * 1e6)}};
   }
   nlohmann::json out = identity_json(p);
+  out.update(samples_json(rec));
   out.update({          {"f_stop", info.f_stop},
-          {"frame_ms", distribution_json(d)},
-          {"relative_iqr", d.relative_iqr()},
           {"pass_ms", pass_ms},
-          {"samples_ms", frame},
-          {"samples_cpu_ms", rec.cpu_ms()},
           {"samples_pass_ms", pass_values},
-          {"sample_rounds", rec.sample_round},
-          {"frames_per_sample", rec.frames_per_sample},
-          {"warm_up_ms", rec.warm_up_ms},
-          {"settled", rec.settled},
-          {"measure_wall_s", rec.wall_s},
           {"work", info.work},
           {"counters", info.counters},
           {"throughput", throughput},
@@ -543,10 +550,23 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
       measured.push_back(point_json(points[i], r, info[i]));
     }
   }
+  // The baselines are the runner's points after the sweep's (run_sweep).
+  nlohmann::json baselines = nlohmann::json::array(), skipped_baselines = nlohmann::json::array();
+  for (std::size_t b = 0; b < s.baselines.size(); ++b) {
+    const auto& r = rec.points[points.size() + b];
+    nlohmann::json entry = s.baselines[b].identity;
+    if (!r.skipped.empty()) {
+      entry["reason"] = r.skipped;
+      skipped_baselines.push_back(std::move(entry));
+    } else if (!r.samples.empty()) {
+      entry.update(samples_json(r));
+      baselines.push_back(std::move(entry));
+    }
+  }
   nlohmann::json order = nlohmann::json::array();
   for (const auto& round : rec.round_order) {
     nlohmann::json ids = nlohmann::json::array();
-    for (std::size_t i : round) ids.push_back(points[i].id);
+    for (std::size_t i : round) ids.push_back(i < points.size() ? points[i].id : s.baselines.at(i - points.size()).id);
     order.push_back(ids);
   }
   nlohmann::json measurement = {
@@ -576,9 +596,11 @@ nlohmann::json sweep_document(const std::vector<SweepPoint>& points, const std::
   if (s.shard_count > 1) config["shard"] = fmt::format("{}/{}", s.shard_index, s.shard_count);
   if (policy.extra_work_fraction > 0)  // a test of `compare`, never a real run: say so where it shows
     config["injected_slowdown_pct"] = std::lround(policy.extra_work_fraction * 100);
-  return {{"status", rec.status},    {"config", config},     {"methods", methods_json(points)},
-          {"measurement", measurement}, {"points", measured}, {"skipped", skipped},
-          {"elapsed_s", elapsed_s}};
+  nlohmann::json doc = {{"status", rec.status},    {"config", config},     {"methods", methods_json(points)},
+                        {"measurement", measurement}, {"points", measured}, {"skipped", skipped},
+                        {"elapsed_s", elapsed_s}};
+  if (!s.baselines.empty()) doc.update({{"baselines", baselines}, {"skipped_baselines", skipped_baselines}});
+  return doc;
 }
 
 // One line per first visit, then one per round, each with the time left.
@@ -762,12 +784,20 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     info[i].work = targets.plans()[i].work;
     info[i].memory = targets.plans()[i].memory;
   }
+  for (const auto& b : s.baselines) {  // the runner's points after the sweep's
+    names.push_back(b.id);
+    skip.push_back(b.skip);
+  }
   const std::size_t measurable = std::count(skip.begin(), skip.end(), "");
   AccuracyOfPoints accuracy(points, targets, s);
   std::vector<CalibrationKernel> calibration = calibration_kernels(ctx, any_cpu, targets.cpu_threads());
 
   runner::Hooks hooks;
   hooks.prepare = [&](std::size_t i) -> std::unique_ptr<runner::Target> {
+    if (i >= points.size()) {
+      const SweepSettings::Baseline& b = s.baselines.at(i - points.size());
+      return b.prepare(targets.scene(b.scene, b.resolution));
+    }
     info[i].f_stop = targets.lens(points[i]).f_stop;
     return targets.prepare(i);
   };
@@ -806,10 +836,12 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   if (s.visit_together) {
     std::map<std::string, std::size_t> groups;
     for (const auto& p : points) hooks.visit_group.push_back(groups.emplace(s.visit_together(p), groups.size()).first->second);
+    for (const auto& b : s.baselines) hooks.visit_group.push_back(groups.emplace(b.visit_together, groups.size()).first->second);
   }
   if (s.visit_block) {
     std::map<std::string, std::size_t> blocks;
     for (const auto& p : points) hooks.visit_block.push_back(blocks.emplace(s.visit_block(p), blocks.size()).first->second);
+    for (const auto& b : s.baselines) hooks.visit_block.push_back(blocks.emplace(b.visit_block, blocks.size()).first->second);
   }
   if (s.points_needed) {
     // A later process of several judges the run's figures, the earlier processes' rounds and its own:
@@ -822,13 +854,13 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
     };
   }
 
-  fmt::print("{}: {} points ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s{}\n", s.name, points.size(),
-             measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
+  fmt::print("{}: {} points{} ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s{}\n", s.name, names.size(),
+             s.baselines.empty() ? "" : fmt::format(", {} of them CPU baselines", s.baselines.size()), measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
              s.policy.budget_s,
              s.processes > 1 ? fmt::format(" over {} processes one after another", s.processes)
              : s.process_index > 0 ? fmt::format(" (process {}, --process)", s.process_index) : "");
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!skip[i].empty()) fmt::print("  skipped {}: {}\n", points[i].id, skip[i]);
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (!skip[i].empty()) fmt::print("  skipped {}: {}\n", names[i], skip[i]);
 
   runner::RunRecord record;
   {

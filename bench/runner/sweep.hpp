@@ -4,6 +4,7 @@
 // interleaved (runner.hpp) on the GPU and as CPU references, attaches each point's error against the
 // cached exact reference, writes partial results atomically beside the complete ones, and plots.
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -133,8 +134,23 @@ struct SweepSettings {
   // keys are equal. Empty: every group on its own.
   std::function<std::string(const SweepPoint&)> visit_block;
   // Which points a figure still too wide needs (runner::Hooks::points_needed), given the run's
-  // context (its device); empty: all of them.
+  // context (its device): one flag per point, then one per baseline; empty: all of them.
   std::function<std::vector<bool>(const runner::RunRecord&, const nlohmann::json& context)> points_needed;
+  // Timed things that are no method (figure9's CPU baseline, cpu_baseline.hpp): measured in the same
+  // rounds as the points (the runner's points after them, visited with the points whose keys they share),
+  // written to the document's "baselines" (measured) and "skipped_baselines", never given an error, a
+  // work model or a place among the methods' points, so no accuracy ranking, comparison or store series
+  // reads them as a method.
+  struct Baseline {
+    std::string id;            // stable across runs, as a point's id
+    nlohmann::json identity;   // what names it in results (id included)
+    std::string scene;         // whose colour it filters, at `resolution`
+    Resolution resolution;
+    std::string skip;          // why it cannot run in this build ("" when it can)
+    std::string visit_together, visit_block;  // its keys among the points' (visit_together(p), visit_block(p))
+    std::function<std::unique_ptr<runner::Target>(const Scene& scene)> prepare;
+  };
+  std::vector<Baseline> baselines;
   // Adds the command's derived results (fits, ratios, Pareto front) to the document.
   std::function<void(nlohmann::json& doc)> derive;
   // Prints the command's summary from the finished document.

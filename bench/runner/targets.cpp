@@ -157,10 +157,12 @@ SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::str
   }
 }
 
-const Scene& SweepTargets::scene(const SweepPoint& p) {
-  const std::string key = p.scene + "/" + p.resolution.text();
+const Scene& SweepTargets::scene(const SweepPoint& p) { return scene(p.scene, p.resolution); }
+
+const Scene& SweepTargets::scene(const std::string& name, const Resolution& resolution) {
+  const std::string key = name + "/" + resolution.text();
   auto it = scenes_.find(key);
-  if (it == scenes_.end()) it = scenes_.emplace(key, make_scene(p.scene, p.resolution.width_px, p.resolution.height_px)).first;
+  if (it == scenes_.end()) it = scenes_.emplace(key, make_scene(name, resolution.width_px, resolution.height_px)).first;
   return it->second;
 }
 

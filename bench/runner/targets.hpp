@@ -91,6 +91,7 @@ class SweepTargets {
   vk::Context* context() { return ctx_ ? &*ctx_ : nullptr; }
   int cpu_threads() const { return threads_; }
   const Scene& scene(const SweepPoint& p);
+  const Scene& scene(const std::string& name, const Resolution& resolution);  // made once, then shared
   Lens lens(const SweepPoint& p);  // the scene's lens with the point's largest CoC
   std::unique_ptr<runner::Target> prepare(std::size_t i);
 
