@@ -855,8 +855,8 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   }
 
   fmt::print("{}: {} points{} ({} measurable), device {}, LP_NUM_THREADS={}, budget {} s{}\n", s.name, names.size(),
-             s.baselines.empty() ? "" : fmt::format(", {} of them CPU baselines", s.baselines.size()), measurable, ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(),
-             s.policy.budget_s,
+             s.baselines.empty() ? "" : fmt::format(", {} of them CPU baselines", s.baselines.size()), measurable,
+             ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(), s.policy.budget_s,
              s.processes > 1 ? fmt::format(" over {} processes one after another", s.processes)
              : s.process_index > 0 ? fmt::format(" (process {}, --process)", s.process_index) : "");
   for (std::size_t i = 0; i < names.size(); ++i)
