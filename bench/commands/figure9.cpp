@@ -375,6 +375,11 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
                                         {"low", r.low}, {"high", r.high}});
     }
   }
+  // In N order whatever the order of the points (merged shards list theirs shard by shard).
+  std::sort(out.flag_over_baseline.begin(), out.flag_over_baseline.end(), [](const auto& x, const auto& y) {
+    return std::pair{x["baseline"].template get<std::string>(), x["N"].template get<int>()} <
+           std::pair{y["baseline"].template get<std::string>(), y["N"].template get<int>()};
+  });
   out.between_processes = widen_by_processes(out, points, round_process, metric, headlines_only);
   // Each figure's repeat-run interval, and which are wider than their targets (and the points they need).
   for (auto& curve : out.series)

@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """merge recomputes a sweep's derived figures over the merged points with the command's own code: a real
 figure9 run's points split into three shards (naive and FLAG of one N and backend together, as --shard
-keeps them), their derived figures deleted, merged; the merged file's naive/FLAG ratios, growth exponents
-and headlines equal those the figure9 command derived over the same points in the same run (the same
+keeps them, the CPU baselines with the GPU points of their N), their derived figures deleted, merged; the
+merged file's naive/FLAG ratios, FLAG/baseline ratios, growth exponents and headlines equal those the figure9 command derived over the same points in the same run (the same
 samples: deterministic, the bootstrap is seeded), and equal the unsharded file merged alone (1/1).
 The same for adaptive's speed-ups (off and on of one configuration in one shard). A sweep merge knows no
 derivation for says so in its output and JSON.
@@ -16,7 +16,7 @@ import shutil
 import subprocess
 import sys
 
-DERIVED = ("series", "naive_over_flag", "headlines")
+DERIVED = ("series", "naive_over_flag", "headlines", "baseline_series", "flag_over_baseline")
 
 
 def run(cmd, ok=(0,)):
@@ -28,7 +28,7 @@ def run(cmd, ok=(0,)):
 def figures(doc):
     """The derived figures, in an order that does not depend on the points' order in the file."""
     key = lambda r: (r["backend"], r["N"])
-    out = {k: copy.deepcopy(doc[k]) for k in DERIVED}
+    out = {k: copy.deepcopy(doc.get(k)) for k in DERIVED}
     out["naive_over_flag"].sort(key=key)
     out["headlines"]["wall_time"]["naive_over_flag"].sort(key=key)
     out["headlines"]["unsettled"].sort()  # listed in the points' order
@@ -43,6 +43,11 @@ def shard_file(work, base, name, shard, points, derived=DERIVED):
     doc["config"]["shard"] = shard
     doc["points"] = points
     doc["skipped"] = [s for s in base["skipped"]] if shard.startswith("1/") else []
+    # figure9's CPU baselines go with the GPU points of their N, as --shard keeps them
+    gpu_n = {p["N"] for p in points if p["backend"] == "gpu"}
+    for key in ("baselines", "skipped_baselines"):
+        if key in base:
+            doc[key] = [b for b in base[key] if b["N"] in gpu_n]
     path = work / name
     path.write_text(json.dumps(doc))
     return str(path)
@@ -71,6 +76,7 @@ def main(bokehbench, workdir, figure9_json, adaptive_json):
     work.mkdir(parents=True)
     base = json.loads(pathlib.Path(figure9_json).read_text())
     assert base["naive_over_flag"] and base["series"], "the run has no derived figures to check against"
+    assert base.get("flag_over_baseline") or base.get("skipped_baselines"), "the run has no CPU baseline"
     groups = sorted({(p["backend"], p["N"]) for p in base["points"]})
     assert len(groups) >= 3, f"too few (backend, N) groups for three shards: {groups}"
     shards = [[p for p in base["points"] if groups.index((p["backend"], p["N"])) % 3 == i] for i in range(3)]
