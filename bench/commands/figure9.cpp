@@ -587,6 +587,11 @@ void print_between_processes(const nlohmann::json& headlines) {
     spreads.push_back(fmt::format("{} {:.2f} ({} figures, {} degrees of freedom, t = {:.2f})", backend,
                                   s["spread_over_rounds"].get<double>(), s["figures"].get<int>(),
                                   s["degrees_of_freedom"].get<int>(), s["t"].get<double>()));
+  if (spreads.empty()) {  // e.g. --methods flag at two sizes: no naive/FLAG ratio, no larger-half fit
+    fmt::print("between processes: no headline figure (naive/FLAG, a larger-half exponent of 2 or more sizes) to "
+               "measure their spread on, so no interval is widened by it\n");
+    return;
+  }
   fmt::print("between processes: their estimates spread {} times what their own rounds imply; every interval above "
              "has each side at least t times that times its standard error over the processes (above 1: an offset "
              "between processes that one process's rounds do not show)\n",
