@@ -175,7 +175,7 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
     use.from_driver = true;
   }
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
-                      tables = c.pattern.samples_per_pixel() * sizeof(float) + FlagShapeTable::bytes_for(c.pattern);
+                      tables = c.pattern.samples_per_pixel() * sizeof(float) + FlagShapeTable::bytes_for(c.pattern, layer_count, false);
   use.bytes = layers + weighted + tables;
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
                  {"bytes_per_texel", bytes_per_texel(c.precision)},

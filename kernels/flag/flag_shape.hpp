@@ -35,19 +35,45 @@ namespace bokeh {
 // One load per sample and output column on the GPU: a search in per-column monotone tables would
 // cost log2(N) loads instead, each of which lavapipe turns into 8 scalar loads in the horizontal
 // pass's non-uniform control flow; the table is side x (side^2 + 1) ints (276 KiB at N = 41).
+//
+// The row sections, for the scan binning (horizontal_bins = scan, shaders/flag/horizontal_shape_scan.comp):
+// the lattice columns c whose chord for area m covers layer z (halved: hi >= z; both halves: lo <= z - n
+// <= hi), i.e. the shape's row dz = z (halved) or z - n. A convex shape's row is an interval [a, b]:
+// the source at row offset j adds to the output columns j + a - n .. j + b - n of its phase, an
+// interval sum. Packed as (b + 1) << 16 | a, 0 when the row is outside the shape. Laid out for the
+// GPU's workgroups of 8 layers, which load them at a workgroup-uniform address (lavapipe's fast path):
+// per (area m, group g of layers 8 g .. 8 g + 7), kSectionInts ints (three ivec4): the 8 layers'
+// sections (0 past the layer count), then their union [min a, max b] (0: none), then 3 ints of 0.
 struct FlagShapeTable {
   FlagShapeTable(const Aperture& aperture, const GatherPattern& pattern);
+  // From a lattice as given (the tests make shapes no Aperture draws); `aperture` names it and says
+  // whether it is vertically symmetric. Throws std::logic_error where a column's chord or a layer's
+  // row section is not an interval (a shape that is not convex there).
+  FlagShapeTable(const Aperture& aperture, ShapeLattice lattice, const GatherPattern& pattern);
+  static constexpr int kSectionInts = 12;
   ShapeLattice lattice;  // naive's gauges: area and shape test
   int half_n = 0, side = 1;
   bool halved = false;  // one half of the layers: the lattice is mirror-exact (see above)
   std::vector<std::int32_t> chords;
+  std::vector<std::int32_t> sections;  // [(m * layer_groups() + g) * kSectionInts + i], see above
   int layers() const { return halved ? half_n + 1 : side; }
+  int layer_groups() const { return (layers() + 7) / 8; }
   std::int32_t chord(int column, int area) const {
     return chords[static_cast<std::size_t>(column) * (static_cast<std::size_t>(side) * side + 1) + area];
   }
-  std::uint64_t bytes() const { return chords.size() * sizeof(std::int32_t); }
-  // bytes() of any aperture's table on this pattern, without building it.
-  static std::uint64_t bytes_for(const GatherPattern& pattern);
+  // The row section of area m and layer z, and the union of group g's: packed as above.
+  std::int32_t section(int area, int layer) const {
+    return sections[(static_cast<std::size_t>(area) * layer_groups() + layer / 8) * kSectionInts + layer % 8];
+  }
+  std::int32_t section_union(int area, int group) const {
+    return sections[(static_cast<std::size_t>(area) * layer_groups() + group) * kSectionInts + 8];
+  }
+  std::uint64_t chord_bytes() const { return chords.size() * sizeof(std::int32_t); }
+  std::uint64_t section_bytes() const { return sections.size() * sizeof(std::int32_t); }
+  // The table the GPU's horizontal pass reads: the row sections (scan) or the chords (indexed, masked).
+  std::uint64_t bytes(bool scan) const { return scan ? section_bytes() : chord_bytes(); }
+  // bytes(scan) of any aperture's table with `layers` layers on this pattern, without building it.
+  static std::uint64_t bytes_for(const GatherPattern& pattern, int layers, bool scan);
 };
 
 // Whether FLAG keeps one half of the layers for this aperture: vertically symmetric and its float
@@ -67,10 +93,25 @@ Image flag_shape_pack(const Image& color, const Image& radius_px, const FlagShap
 // -colour past its near end, then accumulated from the top layer down (shaders/flag/horizontal_shape.comp).
 FlagLayers flag_shape_horizontal(const Image& packed, const FlagShapeTable& table, const GatherPattern& pattern,
                                  LayerPrecision precision, int threads = default_cpu_threads());
+// The same layers summed in the GPU scan binning's order (shaders/flag/horizontal_shape_scan.comp), bit
+// for bit (f32; the other per-value precisions round the same f32 values): per row, lattice phase,
+// segment of `segment` columns at stride k and layer z, each sample in row order adds itself at the
+// start of its row section's interval of output columns (clamped to the segment) and subtracts itself
+// past its end, in a difference array; a prefix sum along the segment gives the layer. The same samples
+// per layer as flag_shape_horizontal, in another order (within f32 rounding of it). Throws
+// std::invalid_argument for bracketed precisions, segment < 1 and an input whose area (.a) is not one
+// of the table's.
+FlagLayers flag_shape_horizontal_scan(const Image& packed, const FlagShapeTable& table, const GatherPattern& pattern,
+                                      LayerPrecision precision, int segment = kFlagScanSegment,
+                                      int threads = default_cpu_threads());
 // The vertical pass is flag_vertical(layers, pattern, threads, !table.halved).
+// How the CPU sums the horizontal pass: by chords (flag_shape_horizontal; the GPU's indexed and masked
+// bins) or as the GPU's scan binning does (flag_shape_horizontal_scan).
+enum class FlagShapeSums { chords, scan };
 // The whole blur: pack, horizontal, vertical. Throws std::invalid_argument for negative colours in an
 // unsigned precision and for bracketed precisions.
 Image flag_shape_blur(const Image& color, const Image& radius_px, const FlagShapeTable& table,
-                      const GatherPattern& pattern, LayerPrecision precision, int threads = default_cpu_threads());
+                      const GatherPattern& pattern, LayerPrecision precision, int threads = default_cpu_threads(),
+                      FlagShapeSums sums = FlagShapeSums::chords);
 
 }  // namespace bokeh

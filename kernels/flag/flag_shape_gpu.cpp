@@ -35,7 +35,7 @@ class FlagShape final : public gpu::GpuFilter {
         table_(aperture, config.pattern),
         outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
         sorted_(vk::make_storage_buffer(frame.ctx, table_.lattice.sorted.size() * sizeof(float), "sorted aperture gauges")),
-        chords_(vk::make_storage_buffer(frame.ctx, table_.bytes(), "FLAG chord table")),
+        chords_(vk::make_storage_buffer(frame.ctx, table_.chord_bytes(), "FLAG chord table")),
         weighted_(vk::make_storage_buffer(frame.ctx, static_cast<VkDeviceSize>(frame.width()) * frame.height() * 16,
                                           "FLAG shape-weighted colour")),
         rows_(flag_shape_layer_rows(config, table_.layers(), frame.width(), frame.height(),
@@ -63,7 +63,7 @@ class FlagShape final : public gpu::GpuFilter {
     check_frame_colour(frame, config.precision);
     check_software_bounds(frame.ctx.info(), outputs_, table_.layers(), false);
     vk::upload(frame.ctx, sorted_, table_.lattice.sorted.data(), table_.lattice.sorted.size() * sizeof(float));
-    vk::upload(frame.ctx, chords_, table_.chords.data(), table_.bytes());
+    vk::upload(frame.ctx, chords_, table_.chords.data(), table_.chord_bytes());
     pack_.bind(0, frame.packed);
     pack_.bind(1, frame.color);
     pack_.bind(2, sorted_);

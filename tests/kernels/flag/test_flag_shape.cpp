@@ -3,8 +3,10 @@
 // own CPU reference on the GPU, and the driver's allocation against the memory model.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -18,6 +20,7 @@
 #include "naive_shape.hpp"
 #include "run.hpp"
 #include "scene.hpp"
+#include "test_support.hpp"
 #include "vk/memory.hpp"
 
 namespace bokeh {
@@ -70,7 +73,8 @@ TEST(FlagShape, MatchesNaiveShapeGatherForEveryShape) {
       EXPECT_EQ(table.halved, shape.halved);
       EXPECT_EQ(table.layers(), shape.halved ? pattern.layers() : pattern.size_n);
       EXPECT_EQ(flag_aperture_layers(aperture, pattern), table.layers());
-      EXPECT_EQ(FlagShapeTable::bytes_for(pattern), table.bytes());
+      for (bool scan : {false, true})
+        EXPECT_EQ(FlagShapeTable::bytes_for(pattern, table.layers(), scan), table.bytes(scan)) << scan;
       const Image naive = naive_shape_gather(color, radius, ShapeLattice(aperture, pattern), pattern, 2);
       const double top = largest(naive);
       for (const auto& [precision, relative] : {std::pair{LayerPrecision::f32, 0.0},
@@ -138,6 +142,134 @@ TEST(FlagShape, DeclaresItsScope) {
   reduced.buffer_scale = 2;
   EXPECT_NE(aperture_unsupported(flag, bracketed).find("precision unorm10_bracketed"), std::string::npos);
   EXPECT_NE(aperture_unsupported(flag, reduced).find("buffer scale 2"), std::string::npos);
+}
+
+// The row sections against the chords they come from: for every area and layer, lattice column c is
+// in the section exactly when its chord covers the layer (halved: hi >= z; both halves: lo <= z - n
+// <= hi), and each group's union is the hull of its sections.
+TEST(FlagShape, RowSectionsAreTheColumnsWhoseChordsCoverTheLayer) {
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}})
+    for (const Shape& shape : kShapes) {
+      SCOPED_TRACE(std::string(shape.name) + " N " + std::to_string(pattern.size_n));
+      const FlagShapeTable table(parse_aperture(shape.name), pattern);
+      const int n = pattern.half(), side = pattern.size_n;
+      for (int m = 0; m <= side * side; ++m)
+        for (int g = 0; g < table.layer_groups(); ++g) {
+          int union_lo = side, union_hi = -1;
+          for (int z = 8 * g; z < 8 * g + 8; ++z) {
+            if (z >= table.layers()) {
+              ASSERT_EQ(table.sections[(static_cast<std::size_t>(m) * table.layer_groups() + g) *
+                                           FlagShapeTable::kSectionInts + z % 8], 0);
+              continue;
+            }
+            const std::int32_t section = table.section(m, z);
+            const int a = section & 0xffff, b = (section >> 16) - 1;
+            for (int c = 0; c < side; ++c) {
+              const std::int32_t chord = table.chord(c, m);
+              const int lo = (chord & 0xffff) - n, hi = (chord >> 16) - n - 1;
+              const bool covers = chord != 0 && (table.halved ? hi >= z : lo <= z - n && z - n <= hi);
+              ASSERT_EQ(covers, section != 0 && a <= c && c <= b) << "area " << m << " layer " << z << " column " << c;
+            }
+            if (section != 0) union_lo = std::min(union_lo, a), union_hi = std::max(union_hi, b);
+          }
+          const std::int32_t hull = table.section_union(m, g);
+          EXPECT_EQ(hull, union_hi < 0 ? 0 : (union_hi + 1) << 16 | union_lo) << "area " << m << " group " << g;
+        }
+    }
+}
+
+// A lattice whose columns are intervals but one of whose rows is not (a U: the centre row, then two
+// arms above it, then square rings): the chords would draw it, the scan's row sections cannot, and the
+// table says so; with the U's gap filled it is accepted.
+TEST(FlagShape, RowSectionWithAGapIsRefused) {
+  const GatherPattern pattern{5, 1};
+  const Aperture aperture = parse_aperture("blades5");
+  ShapeLattice u(aperture, pattern);
+  const int side = u.side, n = pattern.half();
+  auto at = [&](int column, int row) -> float& { return u.gauge[static_cast<std::size_t>(row) * side + column]; };
+  for (int row = 0; row < side; ++row)
+    for (int column = 0; column < side; ++column)
+      at(column, row) = 10.0f + static_cast<float>(std::max(std::abs(column - n), std::abs(row - n)));
+  at(2, 2) = 0.0f;
+  at(1, 2) = at(3, 2) = 1.0f;  // the centre row: columns 1..3
+  at(1, 1) = at(3, 1) = 2.0f;  // the arms one row up: columns 1 and 3, not 2 (area 5)
+  auto table_of = [&] {
+    u.sorted = u.gauge;
+    std::sort(u.sorted.begin(), u.sorted.end());
+    return FlagShapeTable(aperture, u, pattern);
+  };
+  try {
+    table_of();
+    FAIL() << "no error";
+  } catch (const std::logic_error& e) {
+    const std::string what = e.what();
+    for (const char* words : {"blades5", "5x5", "area 5", "layer 1", "row"})
+      EXPECT_NE(what.find(words), std::string::npos) << words << ": " << what;
+  }
+  at(2, 1) = 2.0f;  // the U filled: two whole rows, convex
+  EXPECT_NO_THROW(table_of());
+}
+
+// The scan's order of additions (flag_shape_horizontal_scan, the GPU's) against the chords' (flag_shape_horizontal):
+// the same samples per layer, so the same layers to f32 rounding, 1e-5 of the largest layer value,
+// every shape, segments of 1 column, a few, and the GPU's; the per-value formats round the same values.
+TEST(FlagShape, ScanLayersMatchTheChordLayersToRounding) {
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}}) {
+    Image color, radius;
+    random_frame(61, 23, pattern.max_radius_px(), 11u + pattern.size_n, 0, color, radius);
+    for (const Shape& shape : kShapes) {
+      if (std::string(shape.name) == "disc") continue;
+      const FlagShapeTable table(parse_aperture(shape.name), pattern);
+      const Image packed = flag_shape_pack(color, radius, table, 2);
+      const FlagLayers chords = flag_shape_horizontal(packed, table, pattern, LayerPrecision::f32, 2);
+      double top = 0;
+      for (float v : chords.rgb) top = std::max(top, static_cast<double>(std::abs(v)));
+      for (int segment : {1, 5, kFlagScanSegment}) {
+        SCOPED_TRACE(std::string(shape.name) + " N " + std::to_string(pattern.size_n) + " segment " +
+                     std::to_string(segment));
+        const FlagLayers scan = flag_shape_horizontal_scan(packed, table, pattern, LayerPrecision::f32, segment, 2);
+        ASSERT_EQ(scan.layers, chords.layers);
+        ASSERT_EQ(scan.rgb.size(), chords.rgb.size());
+        for (std::size_t i = 0; i < scan.rgb.size(); ++i)
+          ASSERT_NEAR(scan.rgb[i], chords.rgb[i], 1e-5 * top) << "value " << i;
+      }
+      const FlagLayers f16 = flag_shape_horizontal_scan(packed, table, pattern, LayerPrecision::f16, 7, 2);
+      const FlagLayers f32 = flag_shape_horizontal_scan(packed, table, pattern, LayerPrecision::f32, 7, 2);
+      for (std::size_t i = 0; i < f16.rgb.size(); ++i)
+        ASSERT_EQ(f16.rgb[i], round_layer_value(f32.rgb[i], LayerPrecision::f16, static_cast<int>(i % 3)));
+      // The whole blur by either sum.
+      const Image by_chords = flag_shape_blur(color, radius, table, pattern, LayerPrecision::f32, 2);
+      const Image by_scan =
+          flag_shape_blur(color, radius, table, pattern, LayerPrecision::f32, 2, FlagShapeSums::scan);
+      const double out_top = largest(by_chords);
+      for (std::size_t i = 0; i < by_chords.pixels.size(); ++i)
+        ASSERT_NEAR(by_scan.pixels[i], by_chords.pixels[i], 1e-5 * out_top) << shape.name << " output " << i;
+    }
+  }
+}
+
+TEST(FlagShape, ScanRefusesBadInput) {
+  const GatherPattern pattern{9, 2};
+  const FlagShapeTable table(parse_aperture("blades5"), pattern);
+  Image color, radius;
+  random_frame(20, 6, pattern.max_radius_px(), 5u, 0, color, radius);
+  Image packed = flag_shape_pack(color, radius, table, 1);
+  EXPECT_THROW(flag_shape_horizontal_scan(packed, table, pattern, LayerPrecision::unorm16_bracketed),
+               std::invalid_argument);
+  EXPECT_THROW(flag_shape_horizontal_scan(packed, table, pattern, LayerPrecision::f32, 0), std::invalid_argument);
+  EXPECT_THROW(flag_shape_horizontal_scan(packed, table, GatherPattern{11, 2}, LayerPrecision::f32),
+               std::invalid_argument);
+  EXPECT_THROW(flag_shape_horizontal_scan(color, table, pattern, LayerPrecision::f32), std::invalid_argument);
+  for (float area : {-1.0f, 2.5f, 82.0f, std::nanf("")}) {
+    Image bad = packed;
+    bad.px(7, 3)[3] = area;
+    try {
+      flag_shape_horizontal_scan(bad, table, pattern, LayerPrecision::f32, kFlagScanSegment, 2);
+      ADD_FAILURE() << "area " << area << ": no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("pixel (7, 3)"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // The memory model: both halves for the asymmetric pentagon, one for the hexagon (1080p, N = 41, f16),
