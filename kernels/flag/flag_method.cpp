@@ -159,9 +159,28 @@ Image flag_adaptive_cpu(const CpuInput& in, const FlagConfig& c) {
   return s == 1 ? blurred : flag_upsample(blurred, in.color, in.radius_px, s);
 }
 
+// What the method's models and CPU reference assume without a device: lavapipe (a CPU device).
+const vk::DeviceInfo& software_device() {
+  static const vk::DeviceInfo device = [] {
+    vk::DeviceInfo d;
+    d.type = "cpu";
+    return d;
+  }();
+  return device;
+}
+
+// How the CPU reference sums a non-disc aperture's horizontal pass: in the scan's order where the
+// binning resolves to scan (auto as on lavapipe: the reference has no device), else by chords.
+FlagShapeSums cpu_shape_sums(const FlagConfig& c, const Aperture& aperture) {
+  const int layers = flag_aperture_layers(aperture, c.pattern);
+  return flag_shape_binning(c.horizontal_bins, software_device(), layers) == FlagHorizontalBins::scan
+             ? FlagShapeSums::scan
+             : FlagShapeSums::chords;
+}
+
 // A non-disc aperture (flag_shape.hpp): the layers (N unless the shape is mirror-symmetric; streamed:
 // the ring's rows) as the driver allocates them, the shape-weighted input (vec4 a pixel), naive's
-// sorted gauges and the chord table.
+// sorted gauges and the horizontal pass's table (chords, or row sections for the scan).
 MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, int w, int h, vk::Context* ctx) {
   const int layer_count = flag_aperture_layers(aperture, c.pattern);
   // Streamed: the ring as the GPU driver sizes it; no device: lavapipe's choice.
@@ -174,8 +193,13 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
     layers = vk::image_3d_requirement_bytes(*ctx, layer_format(c.precision), e.width, e.height, e.layers);
     use.from_driver = true;
   }
+  // The horizontal pass's table: the row sections (scan) or the chords, as the binning resolves on
+  // this device (no device: lavapipe's choice).
+  const bool scan = flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(), layer_count) ==
+                    FlagHorizontalBins::scan;
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
-                      tables = c.pattern.samples_per_pixel() * sizeof(float) + FlagShapeTable::bytes_for(c.pattern, layer_count, false);
+                      tables = c.pattern.samples_per_pixel() * sizeof(float) +
+                               FlagShapeTable::bytes_for(c.pattern, layer_count, scan);
   use.bytes = layers + weighted + tables;
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
                  {"bytes_per_texel", bytes_per_texel(c.precision)},
@@ -183,6 +207,7 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
                  {"texel_bytes", texels},
                  {"aperture", aperture.name()},
                  {"layer_halves", layer_count == c.pattern.layers() ? 1 : 2},
+                 {"horizontal_table", scan ? "row sections" : "chords"},
                  {"paper_convention_bytes", static_cast<double>(texels)},
                  {"other_bytes", weighted + tables}};
   if (c.streamed) use.details["streamed"] = {{"band_rows", ring.band_rows}, {"ring_rows", e.height}};
@@ -190,7 +215,7 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
 }
 
 // Why FLAG cannot draw a non-disc aperture with these options ("" when it can): the per-value
-// precisions at full resolution with indexed or masked bins, adaptive off, full or streamed layers.
+// precisions at full resolution, adaptive off, any binning, full or streamed layers.
 std::string flag_shape_unsupported(const FilterOptions& o) {
   if (o.aperture.is_disc()) return "";
   const FlagConfig c = flag_config(o);
@@ -198,10 +223,9 @@ std::string flag_shape_unsupported(const FilterOptions& o) {
   if (is_bracketed(c.precision)) why.push_back("precision " + o.precision);
   if (c.buffer_scale != 1) why.push_back(fmt::format("buffer scale {}", c.buffer_scale));
   if (c.adaptive) why.push_back("adaptive = on");
-  if (c.horizontal_bins == FlagHorizontalBins::scan) why.push_back("horizontal_bins = scan");
   if (why.empty()) return "";
-  return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, indexed or masked bins, buffer "
-                     "scale 1 and adaptive off (full or streamed layers), not with {}",
+  return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, buffer scale 1 and adaptive "
+                     "off (any horizontal_bins, full or streamed layers), not with {}",
                      o.aperture.name(), fmt::join(why, ", "));
 }
 
@@ -291,7 +315,7 @@ void declare_flag(std::vector<Method>& methods) {
     switch (cpu_path(in.options, c, in.packed.width)) {
       case CpuPath::shape:
         return flag_shape_blur(in.color, in.radius_px, FlagShapeTable(in.options.aperture, c.pattern), c.pattern,
-                               c.precision, in.threads);
+                               c.precision, in.threads, cpu_shape_sums(c, in.options.aperture));
       case CpuPath::adaptive: return flag_adaptive_cpu(in, c);
       case CpuPath::reduced:
         return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);

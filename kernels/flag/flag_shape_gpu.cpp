@@ -1,12 +1,12 @@
 // GPU FLAG for any convex aperture (flag_shape.hpp): shape_pack (colour / area and the area, per
-// pixel), horizontal_shape (chord extents into a 3D image of (N + 1) / 2 or N layers), vertical.
+// pixel), horizontal_shape (chord extents into a 3D image of (N + 1) / 2 or N layers; scan bins:
+// horizontal_shape_scan, interval sums by row sections), vertical.
 // layer_buffer = streamed (flag_gpu.hpp): the layers in a ring of B + 2 n k rows, the two passes
 // alternating per band, as the disc's FLAG does (the full buffer's image bit for bit). f32 / f16 /
-// r11g11b10f, indexed or masked bins, scale 1, adaptive off (flag_method.cpp's aperture_unsupported refuses the
-// others before this is made).
+// r11g11b10f, indexed, masked or scan bins, scale 1, adaptive off (flag_method.cpp's aperture_unsupported
+// refuses the others before this is made).
 #include <algorithm>
 #include <stdexcept>
-
 
 #include "ceil_div.hpp"
 #include "flag_config.hpp"
@@ -21,21 +21,29 @@ namespace {
 
 constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
 
+}  // namespace
+
 // The shapes' binning: indexed or masked as chosen; auto as for the disc (masked on lavapipe up to 21
 // layers), except that where the disc's auto takes the scan, which shapes do not have, indexed.
-FlagHorizontalBins shape_binning(const FlagConfig& c, const vk::DeviceInfo& device, int layers) {
-  const FlagHorizontalBins bins = flag_horizontal_binning(c.horizontal_bins, device, layers);
-  return bins == FlagHorizontalBins::scan ? FlagHorizontalBins::indexed : bins;
+FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
+  const FlagHorizontalBins chosen = flag_horizontal_binning(bins, device, layers);
+  if (bins != FlagHorizontalBins::automatic) return chosen;
+  return chosen == FlagHorizontalBins::scan ? FlagHorizontalBins::indexed : chosen;
 }
+
+namespace {
 
 class FlagShape final : public gpu::GpuFilter {
  public:
   FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture)
       : frame_(frame),
         table_(aperture, config.pattern),
-        outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
+        bins_(flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers())),
+        outputs_(scan() ? 1 : flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
         sorted_(vk::make_storage_buffer(frame.ctx, table_.lattice.sorted.size() * sizeof(float), "sorted aperture gauges")),
-        chords_(vk::make_storage_buffer(frame.ctx, table_.chord_bytes(), "FLAG chord table")),
+        // The scan reads the row sections, the other binnings the chords: only that one is on the device.
+        table_buffer_(vk::make_storage_buffer(frame.ctx, table_.bytes(scan()),
+                                              scan() ? "FLAG row-section table" : "FLAG chord table")),
         weighted_(vk::make_storage_buffer(frame.ctx, static_cast<VkDeviceSize>(frame.width()) * frame.height() * 16,
                                           "FLAG shape-weighted colour")),
         rows_(flag_shape_layer_rows(config, table_.layers(), frame.width(), frame.height(),
@@ -45,14 +53,17 @@ class FlagShape final : public gpu::GpuFilter {
                 static_cast<std::uint32_t>(rows_.extent.height), static_cast<std::uint32_t>(table_.layers())),
         pack_(frame.ctx, vk::spirv("flag/shape_pack"), std::vector<VkDescriptorType>(4, kBuffer),
               sizeof(gpu::PassParams)),
-        // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 7 LAYER_ROWS (0: the full
-        // buffer), 8 BOTH_HALVES.
-        horizontal_(frame.ctx, vk::spirv("flag/horizontal_shape_" + std::string(to_string(config.precision))),
+        // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 6 the scan's SEGMENT, 7 LAYER_ROWS
+        // (0: the full buffer), 8 BOTH_HALVES. Scan: a workgroup is 8 layers of one row segment
+        // (lavapipe's 8 lanes, so its loads are uniform).
+        horizontal_(frame.ctx,
+                    vk::spirv(std::string(scan() ? "flag/horizontal_shape_scan_" : "flag/horizontal_shape_") +
+                              to_string(config.precision)),
                     std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}, sizeof(gpu::PassParams),
                     std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, outputs_, 0,
-                                              shape_binning(config, frame.ctx.info(), table_.layers()) ==
-                                                  FlagHorizontalBins::masked,
-                                              0, layer_ring_rows(), !table_.halved}),
+                                              bins_ == FlagHorizontalBins::masked, kFlagScanSegment,
+                                              layer_ring_rows(), !table_.halved},
+                    scan() ? vk::LocalSize{8, 1} : vk::LocalSize{}),
         vertical_(frame.ctx, vk::spirv("flag/vertical_" + std::string(to_string(config.precision))),
                   std::vector<VkDescriptorType>{kImage, kBuffer}, sizeof(gpu::PassParams),
                   std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(), !table_.halved,
@@ -61,16 +72,20 @@ class FlagShape final : public gpu::GpuFilter {
     if (is_bracketed(config.precision) || config.buffer_scale != 1 || config.adaptive)
       throw std::logic_error("make_flag_shape_gpu: a configuration aperture_unsupported refuses");
     check_frame_colour(frame, config.precision);
+    // The scan runs no block (its difference array is kFlagScanSegment vec3 whatever the layers).
     check_software_bounds(frame.ctx.info(), outputs_, table_.layers(), false);
     vk::upload(frame.ctx, sorted_, table_.lattice.sorted.data(), table_.lattice.sorted.size() * sizeof(float));
-    vk::upload(frame.ctx, chords_, table_.chords.data(), table_.chord_bytes());
+    if (scan())
+      vk::upload(frame.ctx, table_buffer_, table_.sections.data(), table_.section_bytes());
+    else
+      vk::upload(frame.ctx, table_buffer_, table_.chords.data(), table_.chord_bytes());
     pack_.bind(0, frame.packed);
     pack_.bind(1, frame.color);
     pack_.bind(2, sorted_);
     pack_.bind(3, weighted_);
     horizontal_.bind(0, weighted_);
     horizontal_.bind(1, layers_);
-    horizontal_.bind(2, chords_);
+    horizontal_.bind(2, table_buffer_);
     vertical_.bind(0, layers_);
     vertical_.bind(1, frame.output);
   }
@@ -79,10 +94,9 @@ class FlagShape final : public gpu::GpuFilter {
     gpu::PassParams params = frame_.params;  // a warm-up's region or the frame's
     params.band_y0_px = 0, params.band_y1_px = params.height_px;
     const auto w = static_cast<std::uint32_t>(params.width_px), h = static_cast<std::uint32_t>(params.height_px);
-    const auto k = static_cast<std::uint32_t>(params.spacing_px);
     pack_.dispatch(cmd, &params, w, h);
     timer.end_pass(cmd, "shape_pack");
-    const std::uint32_t horizontal_x = ceil_div(w, static_cast<std::uint32_t>(outputs_) * k) * k;
+    const std::uint32_t horizontal_x = horizontal_invocations_x(params);
     if (!streamed_) {
       horizontal_.dispatch(cmd, &params, horizontal_x, h);
       timer.end_pass(cmd, "horizontal");
@@ -111,17 +125,27 @@ class FlagShape final : public gpu::GpuFilter {
 
   std::uint64_t intermediate_bytes() const override {
     return layers_.allocated_bytes() + weighted_.allocated_bytes() + sorted_.allocated_bytes() +
-           chords_.allocated_bytes();
+           table_buffer_.allocated_bytes();
   }
 
  private:
   gpu::GpuFrame& frame_;
   FlagShapeTable table_;
+  bool scan() const { return bins_ == FlagHorizontalBins::scan; }
   // LAYER_ROWS (shaders/flag/layer_rows.glsl): the ring's rows, or 0 for the full buffer.
   std::int32_t layer_ring_rows() const { return streamed_ ? rows_.extent.height : 0; }
+  // Invocations of the horizontal pass along a row: scan, k phases x ceil(ceil(W / k) / SEGMENT)
+  // segments x ceil(layers / 8) workgroups of 8 (flag_gpu.cpp's); else a block of pixels each.
+  std::uint32_t horizontal_invocations_x(const gpu::PassParams& params) const {
+    const auto w = static_cast<std::uint32_t>(params.width_px), k = static_cast<std::uint32_t>(params.spacing_px);
+    if (!scan()) return ceil_div(w, static_cast<std::uint32_t>(outputs_) * k) * k;
+    const std::uint32_t segments = ceil_div(ceil_div(w, k), static_cast<std::uint32_t>(kFlagScanSegment));
+    return segments * k * ceil_div(static_cast<std::uint32_t>(table_.layers()), 8u) * 8u;
+  }
 
-  std::int32_t outputs_;  // pixels per invocation of the horizontal pass
-  vk::Buffer sorted_, chords_, weighted_;
+  FlagHorizontalBins bins_;  // as run (never automatic)
+  std::int32_t outputs_;     // pixels per invocation of the horizontal pass (scan: 1, unused)
+  vk::Buffer sorted_, table_buffer_, weighted_;
   FlagStreamRing rows_;   // the layer image's extent (streamed: the ring's) and band (0: full)
   bool streamed_;
   vk::StorageImage3D layers_;

@@ -27,7 +27,7 @@
 #endif
 #include "layers.glsl"  // LAYERS, SPACING, the packed input, the brackets (its bins are not used here)
 
-layout(constant_id = 6) const int SEGMENT = 256;  // output columns per workgroup, at stride k
+#include "scan_segment.glsl"  // SEGMENT, the workgroup's layers, row, phase and columns
 layout(binding = 1, LAYER_FORMAT) uniform writeonly image3D layers;
 
 #if ADAPTIVE
@@ -38,12 +38,10 @@ layout(binding = 1, LAYER_FORMAT) uniform writeonly image3D layers;
 
 void main() {
   const int n = LAYERS - 1, k = SPACING;
-  // Workgroup (g + G s, y), G = ceil(LAYERS / 8): layers 8 g .. 8 g + 7 (those past n store nothing)
-  // of phase s % k, lattice columns c0 .. c0 + SEGMENT - 1 of it, c0 = (s / k) SEGMENT.
-  const int groups = (LAYERS + 7) / 8, s = int(gl_WorkGroupID.x) / groups;
-  const int y = band_row(int(gl_WorkGroupID.y));
-  const int z_first = (int(gl_WorkGroupID.x) % groups) * 8, z = z_first + int(gl_LocalInvocationID.x);
-  const int c0 = (s / k) * SEGMENT, x0 = s % k + c0 * k;  // column t of the segment is x0 + t k
+  // Layers z_first .. z_first + 7 (those past n store nothing) of row y, columns x0 + t k.
+  const ScanSegment segment = scan_segment(LAYERS, k);
+  const int y = segment.y, c0 = segment.c0, x0 = segment.x0;
+  const int z_first = segment.z_first, z = z_first + int(gl_LocalInvocationID.x);
   if (x0 >= params.width_px) return;  // uniform: a phase with fewer columns than the dispatch covers
 #if ADAPTIVE
   // The segment's tiles: the same for every invocation of the workgroup, no subgroup reduction.

@@ -27,11 +27,13 @@ bokeh_shader(flag downsample downsample.comp)
 bokeh_shader(flag upsample upsample.comp)
 bokeh_shader(flag tile_layers tile_layers.comp)
 # Any convex aperture (kernels/flag/flag_shape.hpp): the shape's weights and areas, then the horizontal
-# pass by chord extents, per per-value precision (the vertical pass is vertical_<precision>).
+# pass by chord extents or (horizontal_bins = scan) by row sections, per per-value precision (the
+# vertical pass is vertical_<precision>).
 bokeh_shader(flag shape_pack shape_pack.comp)
 foreach(entry IN ITEMS f32:rgba32f f16:rgba16f r11g11b10f:r11f_g11f_b10f)
   string(REPLACE ":" ";" fields ${entry})
   list(GET fields 0 precision)
   list(GET fields 1 format)
   bokeh_shader(flag horizontal_shape_${precision} horizontal_shape.comp LAYER_FORMAT=${format})
+  bokeh_shader(flag horizontal_shape_scan_${precision} horizontal_shape_scan.comp LAYER_FORMAT=${format})
 endforeach()

@@ -120,23 +120,25 @@ TEST(FlagShape, ConservesEnergyForEveryShape) {
   }
 }
 
-// The full and the streamed buffer draw every shape; the other paths say why not, naming the option.
+// The full and the streamed buffer draw every shape with every binning; the other paths say why not,
+// naming the option.
 TEST(FlagShape, DeclaresItsScope) {
   const Method& flag = find_method("flag");
   FilterOptions o = flag.defaults({9, 2});
   o.aperture = parse_aperture("blades5");
   EXPECT_EQ(aperture_unsupported(flag, o), "");
-  FilterOptions streamed = o, masked = o;
+  FilterOptions streamed = o;
   streamed.values["layer_buffer"] = 1;
-  masked.values["horizontal_bins"] = 2;
   EXPECT_EQ(aperture_unsupported(flag, streamed), "");
-  EXPECT_EQ(aperture_unsupported(flag, masked), "");
-  for (const auto& [key, value, words] : {std::tuple{"adaptive", 1.0, "adaptive = on"},
-                                          std::tuple{"horizontal_bins", 3.0, "horizontal_bins = scan"}}) {
+  for (double bins : {1.0, 2.0, 3.0}) {  // indexed, masked, scan
     FilterOptions v = o;
-    v.values[key] = value;
-    EXPECT_NE(aperture_unsupported(flag, v).find(words), std::string::npos) << aperture_unsupported(flag, v);
+    v.values["horizontal_bins"] = bins;
+    EXPECT_EQ(aperture_unsupported(flag, v), "") << bins;
   }
+  FilterOptions adaptive = o;
+  adaptive.values["adaptive"] = 1;
+  EXPECT_NE(aperture_unsupported(flag, adaptive).find("adaptive = on"), std::string::npos)
+      << aperture_unsupported(flag, adaptive);
   FilterOptions bracketed = o, reduced = o;
   bracketed.precision = "unorm10_bracketed";
   reduced.buffer_scale = 2;
@@ -273,7 +275,8 @@ TEST(FlagShape, ScanRefusesBadInput) {
 }
 
 // The memory model: both halves for the asymmetric pentagon, one for the hexagon (1080p, N = 41, f16),
-// and the bytes the GPU driver allocates for a shape equal the model's (as the disc's do).
+// and the bytes the GPU driver allocates for a shape equal the model's (as the disc's do), with the
+// chord table (indexed, masked) or the row sections (scan).
 TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
   const Method& flag = find_method("flag");
   FilterOptions hexagon = flag.defaults({41, 1}), pentagon = hexagon;
@@ -283,41 +286,55 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
   EXPECT_EQ(flag.gpu_memory(hexagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 21);
   EXPECT_EQ(flag.gpu_memory(pentagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 41);
   EXPECT_EQ(flag.gpu_memory(flag.defaults({41, 1}), 1920, 1080, nullptr).details["texel_bytes"], texels * 21);
+  FilterOptions scan = pentagon;
+  scan.values["horizontal_bins"] = 3;
+  const MemoryUse indexed_model = flag.gpu_memory(pentagon, 1920, 1080, nullptr);
+  const MemoryUse scan_model = flag.gpu_memory(scan, 1920, 1080, nullptr);
+  EXPECT_EQ(scan_model.details["horizontal_table"], "row sections");
+  // 41 layers: 6 groups of 48 bytes per area, against 41 columns of 4 bytes.
+  EXPECT_EQ(scan_model.bytes - indexed_model.bytes, (41ull * 41 + 1) * (6 * 48 - 41 * 4));
 
   const Scene s = make_scene("hoops", 61, 45);
-  for (const char* name : {"blades5", "blades6"}) {
-    FilterOptions o = flag.defaults({9, 2});
-    o.aperture = parse_aperture(name);
-    Lens lens = s.lens;
-    lens.aperture = o.aperture;
-    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, o.pattern);
-    const auto filter = flag.make_gpu(frame, o);
-    const MemoryUse model = flag.gpu_memory(o, 61, 45, &context());
-    EXPECT_TRUE(model.from_driver);
-    EXPECT_EQ(model.details["layer_buffer_bytes"].get<std::uint64_t>(),
-              vk::image_3d_requirement_bytes(context(), layer_format(LayerPrecision::f16), 61, 45,
-                                             std::string(name) == "blades5" ? 9 : 5));
-    // Buffers are sub-allocated at the device's alignment: within a few hundred bytes each.
-    EXPECT_GE(filter->intermediate_bytes(), model.bytes) << name;
-    EXPECT_LE(filter->intermediate_bytes(), model.bytes + 3 * 256) << name;
-  }
+  for (const char* name : {"blades5", "blades6"})
+    for (double bins : {0.0, 3.0}) {  // auto (masked here), scan
+      FilterOptions o = flag.defaults({9, 2});
+      o.aperture = parse_aperture(name);
+      o.values["horizontal_bins"] = bins;
+      Lens lens = s.lens;
+      lens.aperture = o.aperture;
+      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, o.pattern);
+      const auto filter = flag.make_gpu(frame, o);
+      const MemoryUse model = flag.gpu_memory(o, 61, 45, &context());
+      EXPECT_TRUE(model.from_driver);
+      EXPECT_EQ(model.details["horizontal_table"], bins == 3.0 ? "row sections" : "chords");
+      EXPECT_EQ(model.details["layer_buffer_bytes"].get<std::uint64_t>(),
+                vk::image_3d_requirement_bytes(context(), layer_format(LayerPrecision::f16), 61, 45,
+                                               std::string(name) == "blades5" ? 9 : 5));
+      // Buffers are sub-allocated at the device's alignment: within a few hundred bytes each.
+      EXPECT_GE(filter->intermediate_bytes(), model.bytes) << name << " bins " << bins;
+      EXPECT_LE(filter->intermediate_bytes(), model.bytes + 3 * 256) << name << " bins " << bins;
+    }
 }
 
-// The GPU against the CPU reference, every per-value precision and horizontal block, asymmetric,
-// symmetric and curved shapes, within the method's declared bound.
+// The GPU against the CPU reference, every per-value precision, horizontal block and the scan binning,
+// asymmetric, symmetric and curved shapes, within the method's declared bound.
 TEST(FlagShape, GpuMatchesCpuReference) {
   const Method& flag = find_method("flag");
   const Scene s = make_scene("hoops", 63, 46);
   for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}})
     for (const char* name : {"blades5", "blades6", "blades7-rot15-curv0.3"})
       for (const char* precision : {"f32", "f16", "r11g11b10f"})
-        for (double block : {0.0, 1.0}) {  // auto (4 on lavapipe), 1 (f32 only: the same layers either way)
+        // Auto (block 4 on lavapipe), block 1 (f32 only: the same layers either way), scan bins (the
+        // CPU reference then sums in the scan's order).
+        for (const auto& [block, bins] : {std::pair{0.0, 0.0}, std::pair{1.0, 0.0}, std::pair{0.0, 3.0}}) {
           if (block == 1.0 && std::string(precision) != "f32") continue;
-          SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n));
+          SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n) + " bins " +
+                       flag_horizontal_bins()[std::size_t(bins)]);
           FilterOptions o = flag.defaults(pattern);
           o.precision = precision;
           o.aperture = parse_aperture(name);
           o.values["horizontal_block"] = block;
+          o.values["horizontal_bins"] = bins;
           Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
           lens.aperture = o.aperture;
           const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, o, 2);
@@ -362,17 +379,18 @@ TEST(FlagShape, MaskedBinsMatchIndexedBitForBit) {
 }
 
 // Streamed layers (a ring of B + 2 n k rows, band by band) give the full buffer's image bit for bit,
-// both halves or one, in less memory; the model sizes the ring as the driver allocates it.
+// both halves or one, chords or scan, in less memory; the model sizes the ring as the driver allocates it.
 TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
   const Method& flag = find_method("flag");
   const Scene s = make_scene("hoops", 61, 47);
   const GatherPattern pattern{9, 2};
   for (const char* name : {"blades5", "blades6"})
-    for (const char* precision : {"f32", "f16"}) {
-      SCOPED_TRACE(std::string(name) + " " + precision);
+    for (const auto& [precision, bins] : {std::pair{"f32", 0.0}, std::pair{"f16", 0.0}, std::pair{"f32", 3.0}}) {
+      SCOPED_TRACE(std::string(name) + " " + precision + " bins " + flag_horizontal_bins()[std::size_t(bins)]);
       FilterOptions o = flag.defaults(pattern);
       o.precision = precision;
       o.aperture = parse_aperture(name);
+      o.values["horizontal_bins"] = bins;
       Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
       lens.aperture = o.aperture;
       gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
@@ -398,6 +416,64 @@ TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
         }
       }
     }
+}
+
+// The scan binning's CPU mirror (flag_shape_horizontal_scan, then flag_vertical, f32) of the frame the GPU
+// just ran: its weights from the GPU's radii (colour / area, an exact division on both).
+Image scan_mirror(gpu::GpuFrame& frame, const Image& color, const Aperture& aperture, const GatherPattern& pattern) {
+  const Image packed = frame.read_packed();
+  Image radius(packed.width, packed.height, 1);
+  for (std::size_t i = 0; i < packed.pixel_count(); ++i) radius.pixels[i] = packed.pixels[i * 4 + 3];
+  const FlagShapeTable table(aperture, pattern);
+  const Image weighted = flag_shape_pack(color, radius, table, 2);
+  return flag_vertical(flag_shape_horizontal_scan(weighted, table, pattern, LayerPrecision::f32), pattern, 2,
+                       !table.halved);
+}
+
+// The scan binning on the GPU against its CPU mirror (flag_shape_horizontal_scan, then flag_vertical) on
+// the same weighted input, bit for bit (f32): the halved hexagon and the asymmetric pentagon, k = 1 and
+// 2, on frames wider than one segment of kFlagScanSegment columns per phase (the last one partial), so
+// the patterns reach across segment boundaries, with radii clamped at the pattern's (every area).
+TEST(FlagShape, ScanEqualsItsCpuMirrorBitForBitAcrossSegments) {
+  const Method& flag = find_method("flag");
+  for (const GatherPattern pattern : {GatherPattern{21, 2}, GatherPattern{41, 1}})
+    for (const char* name : {"blades6", "blades5"}) {
+      SCOPED_TRACE(std::string(name) + " N " + std::to_string(pattern.size_n) + " k " +
+                   std::to_string(pattern.spacing_px));
+      const Scene s = make_scene("hoops", kFlagScanSegment * pattern.spacing_px + 77, 16);
+      FilterOptions o = flag.defaults(pattern);
+      o.precision = "f32";
+      o.aperture = parse_aperture(name);
+      o.values["horizontal_bins"] = 3;  // scan
+      Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+      lens.aperture = o.aperture;
+      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+      vk::TimestampQueries timer(context(), 16);
+      auto filter = flag.make_gpu(frame, o);
+      gpu::run_frames(frame, *filter, timer);
+      EXPECT_TRUE(test::same_bits(frame.read_output(), scan_mirror(frame, s.color, o.aperture, pattern)));
+    }
+}
+
+// The largest pattern (N = 201: the pentagon's 201 layers in 26 groups, a 50 MB row-section table) with
+// single lights reaching past the frame: the CPU mirror bit for bit.
+TEST(FlagShape, ScanWorksAtTheLargestPattern) {
+  const Method& flag = find_method("flag");
+  const GatherPattern pattern{201, 1};
+  const Scene s = make_scene("points", 48, 40);
+  FilterOptions o = flag.defaults(pattern);
+  o.precision = "f32";
+  o.aperture = parse_aperture("blades5");
+  o.values["horizontal_bins"] = 3;  // scan
+  Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px());
+  lens.aperture = o.aperture;
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  vk::TimestampQueries timer(context(), 16);
+  auto filter = flag.make_gpu(frame, o);
+  gpu::run_frames(frame, *filter, timer);
+  const Image gpu = frame.read_output();
+  EXPECT_GT(largest(gpu), 0.0);
+  EXPECT_TRUE(test::same_bits(gpu, scan_mirror(frame, s.color, o.aperture, pattern)));
 }
 
 }  // namespace

@@ -1,0 +1,67 @@
+#version 450
+// FLAG horizontal pass for a non-disc aperture, horizontal_bins = scan (kernels/flag/flag_shape.hpp; the
+// disc's is horizontal_scan.comp, whose structure this follows): per layer, the sum of the row samples
+// whose shape covers it, as interval sums. In a segment (columns x0 + t k), the sample at column x0 + j k
+// reaches output column t in layer z when the shape of its area m covers lattice column t - j + n (the
+// offset from source to pixel is (t - j) k) in the layer's row: when t - j is in [a - n, b - n], [a, b]
+// the row section of (m, z) (FlagShapeTable::sections), so it adds to one interval of columns a layer.
+// One workgroup of 8 invocations is 8 layers of one row segment of SEGMENT columns of one lattice phase
+// (scan_segment.glsl), one invocation one layer: each sample adds itself at its interval's start
+// (clamped to the segment) and subtracts itself past its end in the invocation's difference array, and
+// a prefix sum along the segment gives the layer. Every buffer load in the sample loop is at a
+// workgroup-uniform address outside divergent control flow, which lavapipe loads once for all lanes:
+// the sample, then its row sections as whole vectors (the 8 layers' in two ivec4, their union in a
+// third), from which each invocation picks its own by selects on its lane (a dynamically indexed
+// array would be a per-lane access). A sample whose union reaches no column of the segment is skipped.
+// Order of additions: flag_shape_horizontal_scan() in kernels/flag/flag_shape.cpp, bit for bit.
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+#include "layers.glsl"  // LAYERS (the shape's layer count), SPACING; packed_input: colour / area, area
+#include "scan_segment.glsl"
+
+layout(binding = 1, LAYER_FORMAT) uniform writeonly image3D layers;
+// FlagShapeTable::sections: per (area m, group g of 8 layers), three ivec4: the row sections of layers
+// 8 g .. 8 g + 3 and 8 g + 4 .. 8 g + 7, then their union in .x; each packed (b + 1) << 16 | a, 0: none.
+layout(std430, binding = 2) readonly buffer Sections { ivec4 sections[]; };
+
+// Offsets t - j of the output columns an entry reaches: [first, last]; entry 0 gives last < first.
+int first_of(int entry, int n) { return (entry & 0xffff) - n; }
+int last_of(int entry, int n) { return (entry >> 16) - 1 - n; }
+
+void main() {
+  const int n = params.half_n, k = SPACING, groups = (LAYERS + 7) / 8;
+  const ScanSegment segment = scan_segment(LAYERS, k);
+  const int y = segment.y, c0 = segment.c0, x0 = segment.x0, lane = int(gl_LocalInvocationID.x);
+  const int g = segment.z_first / 8, z = segment.z_first + lane;  // layers past LAYERS store nothing
+  if (x0 >= params.width_px) return;  // uniform: a phase with fewer columns than the dispatch covers
+  // Samples j (column x0 + j k) within n of the segment and inside the frame.
+  const int j_lo = max(-n, -c0), j_hi = min(SEGMENT - 1 + n, (params.width_px - 1 - x0) / k);
+  vec3 diff[SEGMENT];
+  for (int t = 0; t < SEGMENT; ++t) diff[t] = vec3(0.0);
+  for (int j = j_lo; j <= j_hi; ++j) {
+    // Skip the samples whose group's union reaches no column of the segment, in a loop of uniform
+    // exit (as horizontal_scan.comp's): `at` is the sample's (m, g) entry, uniform.
+    int at = 0;
+    for (; j <= j_hi; ++j) {
+      at = (int(packed_input[index_of(ivec2(x0 + j * k, y))].a) * groups + g) * 3;
+      const int reach = sections[at + 2].x;
+      if (reach != 0 && j + last_of(reach, n) >= 0 && j + first_of(reach, n) < SEGMENT) break;
+    }
+    if (j > j_hi) break;
+    const vec3 src = packed_input[index_of(ivec2(x0 + j * k, y))].rgb;
+    const ivec4 low = sections[at], high = sections[at + 1];
+    const ivec4 four = lane < 4 ? low : high;
+    const int entry = (lane & 3) == 0 ? four.x : (lane & 3) == 1 ? four.y : (lane & 3) == 2 ? four.z : four.w;
+    const int first = j + first_of(entry, n), last = j + last_of(entry, n);
+    const bool starts = entry != 0 && last >= 0 && first < SEGMENT, ends = starts && last + 1 < SEGMENT;
+    // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
+    diff[clamp(first, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
+    diff[clamp(last + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+  }
+  vec3 running = vec3(0.0);
+  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);  // within the frame
+  for (int t = 0; t < columns; ++t) {
+    running += diff[t];
+    if (z < LAYERS) imageStore(layers, ivec3(x0 + t * k, layer_row(y), z), vec4(running, 0.0));
+  }
+}
