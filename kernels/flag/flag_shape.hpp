@@ -41,9 +41,9 @@ namespace bokeh {
 // <= hi), i.e. the shape's row dz = z (halved) or z - n. A convex shape's row is an interval [a, b]:
 // the source at row offset j adds to the output columns j + a - n .. j + b - n of its phase, an
 // interval sum. Packed as (b + 1) << 16 | a, 0 when the row is outside the shape. Laid out for the
-// GPU's workgroups of 8 layers, which load them at a workgroup-uniform address (lavapipe's fast path):
-// per (area m, group g of layers 8 g .. 8 g + 7), kSectionInts ints (three ivec4): the 8 layers'
-// sections (0 past the layer count), then their union [min a, max b] (0: none), then 3 ints of 0.
+// GPU's workgroups of 8 layers (one invocation a layer): per (area m, group g of layers 8 g .. 8 g + 7),
+// kSectionInts ints (three ivec4): the 8 layers' sections (0 past the layer count), then their union
+// [min a, max b] (0: none; the skip test of the whole group), then 3 ints of 0.
 struct FlagShapeTable {
   FlagShapeTable(const Aperture& aperture, const GatherPattern& pattern);
   // From a lattice as given (the tests make shapes no Aperture draws); `aperture` names it and says

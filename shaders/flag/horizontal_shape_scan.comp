@@ -8,11 +8,16 @@
 // One workgroup of 8 invocations is 8 layers of one row segment of SEGMENT columns of one lattice phase
 // (scan_segment.glsl), one invocation one layer: each sample adds itself at its interval's start
 // (clamped to the segment) and subtracts itself past its end in the invocation's difference array, and
-// a prefix sum along the segment gives the layer. Every buffer load in the sample loop is at a
-// workgroup-uniform address outside divergent control flow, which lavapipe loads once for all lanes:
-// the sample, then its row sections as whole vectors (the 8 layers' in two ivec4, their union in a
-// third), from which each invocation picks its own by selects on its lane (a dynamically indexed
-// array would be a per-lane access). A sample whose union reaches no column of the segment is skipped.
+// a prefix sum along the segment gives the layer. The sample and its (area, layer group) entry are at
+// workgroup-uniform addresses, loaded in the sample loop outside divergent control flow; a sample whose
+// group's union of sections reaches no column of the segment is skipped in a uniform-exit loop.
+// Each invocation loads its own layer's section as one int, not the group's two ivec4 picked from by
+// selects on the lane: the Mesa source read (lp_bld_nir_soa.c) takes its one-load path only for an
+// address NIR proves uniform from constants and push constants (nir_src_is_always_uniform), which
+// these (the workgroup id, a loaded area) are not, so an ivec4 costs a scalar load per lane and
+// component. Measured on lavapipe 22.3.6 (`bokehbench ab`, 800x600 hoops, blades6, k = 2, f16, 8 paired
+// rounds, beside another helper's builds), the FLAG frame took 0.925 [0.902, 0.945] (N = 41) and 0.958
+// [0.936, 0.982] (N = 153) of the ivec4 form's time.
 // Order of additions: flag_shape_horizontal_scan() in kernels/flag/flag_shape.cpp, bit for bit.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
@@ -20,9 +25,9 @@
 #include "scan_segment.glsl"
 
 layout(binding = 1, LAYER_FORMAT) uniform writeonly image3D layers;
-// FlagShapeTable::sections: per (area m, group g of 8 layers), three ivec4: the row sections of layers
-// 8 g .. 8 g + 3 and 8 g + 4 .. 8 g + 7, then their union in .x; each packed (b + 1) << 16 | a, 0: none.
-layout(std430, binding = 2) readonly buffer Sections { ivec4 sections[]; };
+// FlagShapeTable::sections: per (area m, group g of 8 layers), 12 ints (three ivec4) from (m G + g) 12:
+// the row sections of layers 8 g .. 8 g + 7, then their union; each packed (b + 1) << 16 | a, 0: none.
+layout(std430, binding = 2) readonly buffer Sections { int sections[]; };
 
 // Offsets t - j of the output columns an entry reaches: [first, last]; entry 0 gives last < first.
 int first_of(int entry, int n) { return (entry & 0xffff) - n; }
@@ -40,18 +45,16 @@ void main() {
   for (int t = 0; t < SEGMENT; ++t) diff[t] = vec3(0.0);
   for (int j = j_lo; j <= j_hi; ++j) {
     // Skip the samples whose group's union reaches no column of the segment, in a loop of uniform
-    // exit (as horizontal_scan.comp's): `at` is the sample's (m, g) entry, uniform.
+    // exit (as horizontal_scan.comp's): `at` is the sample's (m, g) entry.
     int at = 0;
     for (; j <= j_hi; ++j) {
-      at = (int(packed_input[index_of(ivec2(x0 + j * k, y))].a) * groups + g) * 3;
-      const int reach = sections[at + 2].x;
+      at = (int(packed_input[index_of(ivec2(x0 + j * k, y))].a) * groups + g) * 12;
+      const int reach = sections[at + 8];
       if (reach != 0 && j + last_of(reach, n) >= 0 && j + first_of(reach, n) < SEGMENT) break;
     }
     if (j > j_hi) break;
     const vec3 src = packed_input[index_of(ivec2(x0 + j * k, y))].rgb;
-    const ivec4 low = sections[at], high = sections[at + 1];
-    const ivec4 four = lane < 4 ? low : high;
-    const int entry = (lane & 3) == 0 ? four.x : (lane & 3) == 1 ? four.y : (lane & 3) == 2 ? four.z : four.w;
+    const int entry = sections[at + lane];
     const int first = j + first_of(entry, n), last = j + last_of(entry, n);
     const bool starts = entry != 0 && last >= 0 && first < SEGMENT, ends = starts && last + 1 < SEGMENT;
     // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
