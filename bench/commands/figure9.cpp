@@ -739,6 +739,7 @@ void figure9(Figure9Options& o) {
   axes.precisions = o.axes.precisions;
   axes.option_values = o.method_options.values_for(axes.methods);
   axes.sweep_choices = o.sweep_choices;
+  axes.apertures = o.axes.aperture_shapes();  // one: the figures pair points by method and N alone
   std::vector<int> sizes;
   for (const auto& p : axes.patterns) sizes.push_back(p.size_n);
   const double target_ratio = o.target_ratio_pct / 100, target_exponent = o.target_exponent;
@@ -754,6 +755,7 @@ void figure9(Figure9Options& o) {
               {"methods", axes.methods},
               {"backends", axes.backends},
               {"precisions", axes.precisions},
+              {"aperture", o.axes.apertures.front()},
               {"quick", o.axes.quick},
               {"target_ratio_pct", o.target_ratio_pct},
               {"cpu_baseline", o.cpu_baseline},
@@ -825,7 +827,8 @@ void add_figure9_command(CLI::App& app) {
   a.resolutions = {"800x600"};
   a.scenes = {"hoops"};
   a.backends = {"gpu", "cpu"};
-  a.add_to(cmd, {Axis::sizes, Axis::methods, Axis::backends, Axis::precisions}, {Axis::resolutions, Axis::scenes});
+  a.add_to(cmd, {Axis::sizes, Axis::methods, Axis::backends, Axis::precisions},
+           {Axis::resolutions, Axis::scenes, Axis::apertures});
   o->method_options.add_to(cmd);
   // Three processes: a first run on a fresh machine then carries the offset between runs (processes.hpp),
   // and one process in an odd draw is a third of the rounds, which a median outvotes (with two, half).
