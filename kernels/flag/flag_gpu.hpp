@@ -34,7 +34,8 @@ int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& de
 // per 8 layers; the same samples per layer in another order of additions (flag_horizontal_scan()
 // mirrors it bit for bit; bracketed precisions quantise its values with the bracket pass's ranges,
 // which sum in the bins' order: within one code). "auto": on CPU devices (lavapipe) masked up to 21
-// layers (N = 41), scan beyond; on GPUs indexed. flag_gpu.cpp has the measurements.
+// layers (N = 41), scan beyond; on GPUs indexed. flag_gpu.cpp has the measurements. Non-disc apertures
+// choose their own (flag_shape_binning, flag_shape_gpu.hpp).
 const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked", "scan"
 // The option's value; the enumerators in the order of flag_horizontal_bins().
 enum class FlagHorizontalBins { automatic, indexed, masked, scan };

@@ -171,9 +171,9 @@ const vk::DeviceInfo& software_device() {
 
 // How the CPU reference sums a non-disc aperture's horizontal pass: in the scan's order where the
 // binning resolves to scan (auto as on lavapipe: the reference has no device), else by chords.
-FlagShapeSums cpu_shape_sums(const FlagConfig& c, const Aperture& aperture) {
-  const int layers = flag_aperture_layers(aperture, c.pattern);
-  return flag_shape_binning(c.horizontal_bins, software_device(), layers) == FlagHorizontalBins::scan
+FlagShapeSums cpu_shape_sums(const FlagConfig& c, const FlagShapeTable& table) {
+  return flag_shape_binning(c.horizontal_bins, software_device(), table.layers(), table.halved) ==
+                 FlagHorizontalBins::scan
              ? FlagShapeSums::scan
              : FlagShapeSums::chords;
 }
@@ -195,8 +195,9 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
   }
   // The horizontal pass's table: the row sections (scan) or the chords, as the binning resolves on
   // this device (no device: lavapipe's choice).
-  const bool scan = flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(), layer_count) ==
-                    FlagHorizontalBins::scan;
+  const bool halved = layer_count == c.pattern.layers();
+  const bool scan = flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(), layer_count,
+                                       halved) == FlagHorizontalBins::scan;
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
                       tables = c.pattern.samples_per_pixel() * sizeof(float) +
                                FlagShapeTable::bytes_for(c.pattern, layer_count, scan);
@@ -206,7 +207,7 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
                  {"layer_buffer_bytes", layers},
                  {"texel_bytes", texels},
                  {"aperture", aperture.name()},
-                 {"layer_halves", layer_count == c.pattern.layers() ? 1 : 2},
+                 {"layer_halves", halved ? 1 : 2},
                  {"horizontal_table", scan ? "row sections" : "chords"},
                  {"paper_convention_bytes", static_cast<double>(texels)},
                  {"other_bytes", weighted + tables}};
@@ -240,8 +241,10 @@ std::vector<OptionSpec> flag_options() {
            "bins[z] += sample (one add per sample, the paper's O(N + n)); masked: every bin tests the sample "
            "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
            "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
-           "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU devices such as lavapipe masked up to 21 layers (N = 41), scan "
-           "beyond; indexed on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
+           "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU "
+           "devices such as lavapipe masked up to 21 layers (N = 41), scan beyond (other apertures: scan for a "
+           "mirror-symmetric shape of 12 layers or more, else indexed); indexed on GPUs. indexed and masked give "
+           "the same image bit for bit, scan to f32 rounding",
            0, 0, 0, false, flag_horizontal_bins()},
           {"vertical_order",
            "flag: the order the GPU vertical pass's workgroups take their tiles. rows: row-major; columns: down "
@@ -313,9 +316,11 @@ void declare_flag(std::vector<Method>& methods) {
   m.cpu_reference = [](const CpuInput& in) {
     const FlagConfig c = flag_config(in.options);
     switch (cpu_path(in.options, c, in.packed.width)) {
-      case CpuPath::shape:
-        return flag_shape_blur(in.color, in.radius_px, FlagShapeTable(in.options.aperture, c.pattern), c.pattern,
-                               c.precision, in.threads, cpu_shape_sums(c, in.options.aperture));
+      case CpuPath::shape: {
+        const FlagShapeTable table(in.options.aperture, c.pattern);
+        return flag_shape_blur(in.color, in.radius_px, table, c.pattern, c.precision, in.threads,
+                               cpu_shape_sums(c, table));
+      }
       case CpuPath::adaptive: return flag_adaptive_cpu(in, c);
       case CpuPath::reduced:
         return flag_reduced_blur(in.color, in.radius_px, c.pattern, c.buffer_scale, c.precision, in.threads);

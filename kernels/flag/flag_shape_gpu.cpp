@@ -23,12 +23,27 @@ constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage =
 
 }  // namespace
 
-// The shapes' binning: indexed or masked as chosen; auto as for the disc (masked on lavapipe up to 21
-// layers), except that where the disc's auto takes the scan, which shapes do not have, indexed.
-FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
-  const FlagHorizontalBins chosen = flag_horizontal_binning(bins, device, layers);
-  if (bins != FlagHorizontalBins::automatic) return chosen;
-  return chosen == FlagHorizontalBins::scan ? FlagHorizontalBins::indexed : chosen;
+// Auto for a non-disc aperture. GPUs: indexed, as for the disc. Software devices (lavapipe): scan for
+// a mirror-symmetric shape of 12 layers or more (N >= 23), else indexed; never masked. Measured on
+// lavapipe (800x600 hoops, k = 2, f16; beside another helper's builds, so indicative only):
+// - `bokehbench figure9 --aperture blades6 --sweep-choices horizontal_bins`, the horizontal pass's
+//   median ms (indexed / masked / scan) and fraction of the copy probe's bandwidth: N = 21: 102 / 291 /
+//   112 ms (13.0 / 4.6 / 11.9%); N = 41: 230 / 1003 / 187 ms (10.2 / 2.3 / 12.6%); N = 81: 364 / 1860 /
+//   320 ms (12.1 / 2.4 / 13.7%); N = 153: 693 / 6090 / 581 ms (11.7 / 1.3 / 13.9%). Masked (the disc's
+//   auto up to 21 layers) took 2.5-9x indexed's time: its per-layer selects do not pay for a chord load.
+// - `bokehbench ab`, auto as indexed against auto as scan, FLAG frame, 14 paired rounds of process CPU
+//   time, scan / indexed [95%]: blades6 (halved: (N + 1) / 2 layers) N = 21 1.038 [1.017, 1.071], 25
+//   0.907 [0.872, 0.934], 31 0.866 [0.814, 0.935], 41 0.888 [0.866, 0.921], 81 0.873 [0.845, 0.899],
+//   153 0.862 [0.840, 0.886]; blades5 (both halves: N layers) N = 11 1.066 [1.014, 1.130], 21 1.047
+//   [0.996, 1.087], 41 1.001 [0.947, 1.072], 81 0.976 [0.938, 1.017]. The scan's work per pixel grows
+//   with the layers, the indexed bins' with N: with both halves (N layers) it has nothing to gain.
+constexpr int kSoftwareShapeScanFirstLayers = 12;
+
+FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers,
+                                      bool halved) {
+  if (bins != FlagHorizontalBins::automatic) return bins;
+  if (!device.is_software()) return FlagHorizontalBins::indexed;
+  return halved && layers >= kSoftwareShapeScanFirstLayers ? FlagHorizontalBins::scan : FlagHorizontalBins::indexed;
 }
 
 namespace {
@@ -38,7 +53,7 @@ class FlagShape final : public gpu::GpuFilter {
   FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture)
       : frame_(frame),
         table_(aperture, config.pattern),
-        bins_(flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers())),
+        bins_(flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers(), table_.halved)),
         outputs_(scan() ? 1 : flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
         sorted_(vk::make_storage_buffer(frame.ctx, table_.lattice.sorted.size() * sizeof(float), "sorted aperture gauges")),
         // The scan reads the row sections, the other binnings the chords: only that one is on the device.

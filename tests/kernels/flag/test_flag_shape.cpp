@@ -15,6 +15,7 @@
 #include "flag.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
+#include "flag_shape_gpu.hpp"
 #include "gpu_test_support.hpp"
 #include "method.hpp"
 #include "naive_shape.hpp"
@@ -144,6 +145,31 @@ TEST(FlagShape, DeclaresItsScope) {
   reduced.buffer_scale = 2;
   EXPECT_NE(aperture_unsupported(flag, bracketed).find("precision unorm10_bracketed"), std::string::npos);
   EXPECT_NE(aperture_unsupported(flag, reduced).find("buffer scale 2"), std::string::npos);
+}
+
+// horizontal_bins = auto for a non-disc aperture: on CPU devices scan for a halved (mirror-symmetric)
+// shape from 12 layers on, else indexed (with both halves the scan gains nothing), never masked; indexed
+// on GPUs; an explicit choice as it is. The method's CPU reference and memory model follow it.
+TEST(FlagShape, AutoBinsAreScanForHalvedShapesFromTwelveLayersOnCpuDevices) {
+  vk::DeviceInfo software, gpu;
+  software.type = "cpu";
+  gpu.type = "discrete";
+  const auto automatic = FlagHorizontalBins::automatic;
+  EXPECT_EQ(flag_shape_binning(automatic, software, 11, true), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_shape_binning(automatic, software, 12, true), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_shape_binning(automatic, software, 77, true), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_shape_binning(automatic, software, 81, false), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_shape_binning(automatic, gpu, 77, true), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::masked, software, 77, true), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::scan, gpu, 5, false), FlagHorizontalBins::scan);
+  // Without a device the model takes lavapipe's choice: N = 23 halves the hexagon into 12 layers.
+  const Method& flag = find_method("flag");
+  for (const auto& [name, n, table] : {std::tuple{"blades6", 21, "chords"}, std::tuple{"blades6", 23, "row sections"},
+                                       std::tuple{"blades5", 81, "chords"}}) {
+    FilterOptions o = flag.defaults({n, 2});
+    o.aperture = parse_aperture(name);
+    EXPECT_EQ(flag.gpu_memory(o, 64, 48, nullptr).details["horizontal_table"], table) << name << " N " << n;
+  }
 }
 
 // The row sections against the chords they come from: for every area and layer, lattice column c is
