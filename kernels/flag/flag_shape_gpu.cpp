@@ -43,7 +43,8 @@ FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceI
                                       bool halved) {
   if (bins != FlagHorizontalBins::automatic) return bins;
   if (!device.is_software()) return FlagHorizontalBins::indexed;
-  return halved && layers >= kSoftwareShapeScanFirstLayers ? FlagHorizontalBins::scan : FlagHorizontalBins::indexed;
+  const bool scan = halved && layers >= kSoftwareShapeScanFirstLayers;
+  return scan ? FlagHorizontalBins::scan : FlagHorizontalBins::indexed;
 }
 
 namespace {
@@ -70,7 +71,7 @@ class FlagShape final : public gpu::GpuFilter {
               sizeof(gpu::PassParams)),
         // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 6 the scan's SEGMENT, 7 LAYER_ROWS
         // (0: the full buffer), 8 BOTH_HALVES. Scan: a workgroup is 8 layers of one row segment
-        // (lavapipe's 8 lanes, so its loads are uniform).
+        // (lavapipe's 8 SIMD lanes: the sample's loads serve the whole workgroup).
         horizontal_(frame.ctx,
                     vk::spirv(std::string(scan() ? "flag/horizontal_shape_scan_" : "flag/horizontal_shape_") +
                               to_string(config.precision)),
