@@ -6,10 +6,11 @@
 // One workgroup of 8 invocations (lavapipe's SIMD width) is 8 layers of one row segment of SEGMENT
 // columns of one lattice phase, one invocation one layer: each sample adds itself at its interval's
 // start (clamped to the segment) and subtracts itself past its end in the invocation's difference
-// array, and a prefix sum along the segment gives the layer. Every sample's address depends on the
-// workgroup alone, so lavapipe loads it once for all lanes (its fast path for a provably uniform
-// address outside divergent control flow), and a sample that reaches none of the workgroup's layers
-// in the segment is skipped. Work per pixel: at most (SEGMENT + 2 n) / SEGMENT samples per layer, O(N).
+// array, and a prefix sum along the segment gives the layer. Every sample's address is the same for
+// the 8 lanes, but Mesa 22.3's lavapipe still loads it lane by lane: its one-load path takes only
+// addresses built from constants and push constants, not from the workgroup id or a loop counter (a
+// shapes' variant loading whole vectors at the shared address to pick from was slower, results/README.md
+// "Scan bins for shapes"). A sample that reaches none of the workgroup's layers in the segment is skipped. Work per pixel: at most (SEGMENT + 2 n) / SEGMENT samples per layer, O(N).
 // The order of additions differs from the bins': flag_horizontal_scan() in kernels/flag/flag.cpp
 // mirrors this one bit for bit.
 // BRACKETED=1: stores (v - offset) / scale of the row's bracket, as horizontal.comp.
