@@ -132,6 +132,7 @@ def figure9_rows(doc):
                 rows.append(row(f"smallest N at which FLAG is faster than naive (the interval above 1), "
                                 f"{backend_name[backend]}",
                                 f"N = {first['N']}: {ratio_text(first)}", context, device[backend], FIGURE9))
+    rows += baseline_rows(doc, frame, context, gpu)
     for backend in ("gpu", "cpu"):
         fits = {}
         for s in doc.get("series", []):
@@ -145,6 +146,28 @@ def figure9_rows(doc):
             rows.append(row(f"growth exponent b of t ~ N^b, {backend_name[backend]}{sizes} (quadratic: 2; linear: 1)",
                             text, context, device[backend], FIGURE9))
     return rows
+
+
+def baseline_rows(doc, frame, context, gpu):
+    """FLAG on the GPU over figure9's CPU baseline (--cpu-baseline) at N = 81 (the issue's comparison) and the
+    largest N: wall-clock first (what a user waits for; the baseline may use its threads unlike lavapipe),
+    then the run's own time."""
+    lead = {r["N"]: r for r in doc.get("flag_over_baseline", [])}
+    wall = {r["N"]: r for r in doc.get("headlines", {}).get("wall_time", {}).get("flag_over_baseline", [])}
+    baselines = {b["N"]: b for b in doc.get("baselines", [])}
+    if not lead or not wall:
+        return []
+    picks = sorted({n for n in (81, max(lead)) if n in lead and n in wall})
+    parts = []
+    for n in picks:
+        w, r = wall[n], lead[n]
+        parts.append(f"N = {n}: {interval(w['flag_over_baseline'], w['low'], w['high'], 2, 'x')} wall-clock; "
+                     f"{interval(r['flag_over_baseline'], r['low'], r['high'], 2, 'x')} in {r.get('time', 'its time')}")
+    label = baselines[picks[0]].get("label", picks[0]) if picks and picks[0] in baselines else "the CPU baseline"
+    version = baselines[picks[0]].get("opencv", "") if picks and picks[0] in baselines else ""
+    device = f"{gpu} / the CPU ({label} {version})".strip()
+    return [row(f"FLAG on the GPU / {label} with one fixed disc of the same taps on the CPU, frame time ({frame}; "
+                f"above 1: FLAG slower)", "; ".join(parts), context, device, FIGURE9)]
 
 
 def figure9_note(doc):
