@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include <Imath/half.h>
@@ -164,39 +165,27 @@ FlagLayers flag_horizontal(const Image& packed, const GatherPattern& p, LayerPre
   return out;
 }
 
-FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& p, LayerPrecision precision, int segment,
-                                int threads) {
-  if (is_bracketed(precision))
-    throw std::invalid_argument(std::string("flag_horizontal_scan: ") + to_string(precision) +
-                                " is bracketed; the scan binning stores per-value precisions only");
-  if (segment < 1) throw std::invalid_argument("flag_horizontal_scan: segment must be >= 1 column");
-  check_layer_input(packed, precision);
-  const int n = p.half(), k = p.spacing_px, w = packed.width, max_index = 2 * n * n;
-  FlagLayers out{w, packed.height, p.layers(), {}, {}, {}};
-  out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * out.layers * 3, 0.0f);
+void flag_scan_layers(const Image& packed, const GatherPattern& p, LayerPrecision precision, int segment,
+                      int threads, FlagLayers& out,
+                      const std::function<std::function<bool(int x, int z, int& first, int& last)>(int y)>& row_intervals) {
+  const int n = p.half(), k = p.spacing_px, w = packed.width;
   parallel_rows(packed.height, threads, [&](int y) {
-    std::vector<int> index(static_cast<std::size_t>(w));
-    for (int x = 0; x < w; ++x) {
-      const float r = packed.px(x, y)[3];
-      index[static_cast<std::size_t>(x)] = disc_index(r * r, k, max_index);
-    }
+    const auto interval = row_intervals(y);
     std::vector<float> diff(static_cast<std::size_t>(segment) * 3);
     for (int phase = 0; phase < k; ++phase)
       for (int c0 = 0; phase + c0 * k < w; c0 += segment) {
         const int x0 = phase + c0 * k;  // column t of the segment is x0 + t k
         const int j_lo = std::max(-n, -c0), j_hi = std::min(segment - 1 + n, (w - 1 - x0) / k);
-        for (int z = 0; z <= n; ++z) {
+        for (int z = 0; z < out.layers; ++z) {
           std::fill(diff.begin(), diff.end(), 0.0f);
           for (int j = j_lo; j <= j_hi; ++j) {
-            const int d = index[static_cast<std::size_t>(x0 + j * k)] - z * z;
-            if (d < 0) continue;
-            const int reach = static_cast<int>(std::min<std::int64_t>(isqrt(d), n));
-            if (j + reach < 0 || j - reach >= segment) continue;
+            int first = 0, last = 0;
+            if (!interval(x0 + j * k, z, first, last) || j + last < 0 || j + first >= segment) continue;
             const float* s = packed.px(x0 + j * k, y);
-            float* start = diff.data() + static_cast<std::size_t>(std::max(j - reach, 0)) * 3;
+            float* start = diff.data() + static_cast<std::size_t>(std::max(j + first, 0)) * 3;
             for (int c = 0; c < 3; ++c) start[c] += s[c];
-            if (j + reach + 1 < segment) {
-              float* end = diff.data() + static_cast<std::size_t>(j + reach + 1) * 3;
+            if (j + last + 1 < segment) {
+              float* end = diff.data() + static_cast<std::size_t>(j + last + 1) * 3;
               for (int c = 0; c < 3; ++c) end[c] -= s[c];
             }
           }
@@ -208,6 +197,32 @@ FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& p, Lay
             }
         }
       }
+  });
+}
+
+FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& p, LayerPrecision precision, int segment,
+                                int threads) {
+  if (is_bracketed(precision))
+    throw std::invalid_argument(std::string("flag_horizontal_scan: ") + to_string(precision) +
+                                " is bracketed; the scan binning stores per-value precisions only");
+  if (segment < 1) throw std::invalid_argument("flag_horizontal_scan: segment must be >= 1 column");
+  check_layer_input(packed, precision);
+  const int n = p.half(), k = p.spacing_px, w = packed.width, max_index = 2 * n * n;
+  FlagLayers out{w, packed.height, p.layers(), {}, {}, {}};
+  out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * out.layers * 3, 0.0f);
+  flag_scan_layers(packed, p, precision, segment, threads, out, [&](int y) {
+    // Each sample's disc index once a row; layer z: the columns within isqrt(index - z^2) of it, up to n.
+    auto index = std::make_shared<std::vector<int>>(static_cast<std::size_t>(w));
+    for (int x = 0; x < w; ++x) {
+      const float r = packed.px(x, y)[3];
+      (*index)[static_cast<std::size_t>(x)] = disc_index(r * r, k, max_index);
+    }
+    return [index, n](int x, int z, int& first, int& last) {
+      const int d = (*index)[static_cast<std::size_t>(x)] - z * z;
+      if (d < 0) return false;
+      last = static_cast<int>(std::min<std::int64_t>(isqrt(d), n)), first = -last;
+      return true;
+    };
   });
   return out;
 }

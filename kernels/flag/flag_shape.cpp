@@ -182,7 +182,7 @@ FlagLayers flag_shape_horizontal_scan(const Image& packed, const FlagShapeTable&
   if (packed.channels != 4)
     throw std::invalid_argument(fmt::format("flag_shape_horizontal_scan: the input has {} channels, not 4 (colour / "
                                             "area, area: flag_shape_pack)", packed.channels));
-  const int n = p.half(), k = p.spacing_px, w = packed.width, layers = table.layers();
+  const int n = p.half(), w = packed.width, layers = table.layers();
   const int max_area = table.side * table.side;
   // The areas index the table: checked here, not in the row workers (an exception there would end the process).
   for (int y = 0; y < packed.height; ++y)
@@ -193,38 +193,15 @@ FlagLayers flag_shape_horizontal_scan(const Image& packed, const FlagShapeTable&
                                                 x, y, a, table.side, table.side));
   FlagLayers out{w, packed.height, layers, {}, {}, {}};
   out.rgb.assign(static_cast<std::size_t>(w) * out.height * layers * 3, 0.0f);
-  parallel_rows(packed.height, threads, [&](int y) {
-    std::vector<int> area(static_cast<std::size_t>(w));
-    for (int x = 0; x < w; ++x) area[static_cast<std::size_t>(x)] = static_cast<int>(packed.px(x, y)[3]);
-    std::vector<float> diff(static_cast<std::size_t>(segment) * 3);
-    for (int phase = 0; phase < k; ++phase)
-      for (int c0 = 0; phase + c0 * k < w; c0 += segment) {
-        const int x0 = phase + c0 * k;  // column t of the segment is x0 + t k
-        const int j_lo = std::max(-n, -c0), j_hi = std::min(segment - 1 + n, (w - 1 - x0) / k);
-        for (int z = 0; z < layers; ++z) {
-          std::fill(diff.begin(), diff.end(), 0.0f);
-          for (int j = j_lo; j <= j_hi; ++j) {
-            const std::int32_t section = table.section(area[static_cast<std::size_t>(x0 + j * k)], z);
-            if (section == 0) continue;
-            // Output columns t = j + first .. j + last of the segment (offset (t - j) k: lattice column t - j + n).
-            const int first = (section & 0xffff) - n, last = (section >> 16) - 1 - n;
-            if (j + last < 0 || j + first >= segment) continue;
-            const float* s = packed.px(x0 + j * k, y);
-            float* start = diff.data() + static_cast<std::size_t>(std::max(j + first, 0)) * 3;
-            for (int c = 0; c < 3; ++c) start[c] += s[c];
-            if (j + last + 1 < segment) {
-              float* end = diff.data() + static_cast<std::size_t>(j + last + 1) * 3;
-              for (int c = 0; c < 3; ++c) end[c] -= s[c];
-            }
-          }
-          float running[3] = {0, 0, 0};
-          for (int t = 0; t < segment && x0 + t * k < w; ++t)
-            for (int c = 0; c < 3; ++c) {
-              running[c] += diff[static_cast<std::size_t>(t) * 3 + c];
-              out.at(x0 + t * k, y, z)[c] = round_layer_value(running[c], precision, c);
-            }
-        }
-      }
+  flag_scan_layers(packed, p, precision, segment, threads, out, [&](int y) {
+    // Layer z: the output columns t = j + first .. j + last of sample j's row section (offset (t - j) k:
+    // lattice column t - j + n), none where the section is 0.
+    return [&packed, &table, n, y](int x, int z, int& first, int& last) {
+      const std::int32_t section = table.section(static_cast<int>(packed.px(x, y)[3]), z);
+      if (section == 0) return false;
+      first = (section & 0xffff) - n, last = (section >> 16) - 1 - n;
+      return true;
+    };
   });
   return out;
 }
