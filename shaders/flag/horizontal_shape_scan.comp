@@ -8,14 +8,12 @@
 // One workgroup of 8 invocations is 8 layers of one row segment of SEGMENT columns of one lattice phase
 // (scan_segment.glsl), one invocation one layer: each sample adds itself at its interval's start
 // (clamped to the segment) and subtracts itself past its end in the invocation's difference array, and
-// a prefix sum along the segment gives the layer. The sample and its (area, layer group) entry are at
-// workgroup-uniform addresses, loaded in the sample loop outside divergent control flow; a sample whose
-// group's union of sections reaches no column of the segment is skipped in a uniform-exit loop.
-// Each invocation loads its own layer's section as one int, not the group's two ivec4 picked from by
-// selects on the lane: the Mesa source read (lp_bld_nir_soa.c) takes its one-load path only for an
-// address NIR proves uniform from constants and push constants (nir_src_is_always_uniform), which
-// these (the workgroup id, a loaded area) are not, so an ivec4 costs a scalar load per lane and
-// component. Measured on lavapipe 22.3.6 (`bokehbench ab`, 800x600 hoops, blades6, k = 2, f16, 8 paired
+// a prefix sum along the segment gives the layer. A sample whose group's union of sections reaches no
+// column of the segment is skipped in a uniform-exit loop. Each invocation loads its own layer's
+// section as one int, not the group's two ivec4 picked from by selects on the lane: lavapipe's one-load
+// path takes only addresses built from constants and push constants (nir_src_is_always_uniform in
+// lp_bld_nir_soa.c), which these (the workgroup id, a loaded area) are not, so an ivec4 at the address
+// the 8 lanes share costs a scalar load per lane and component. Measured on lavapipe 22.3.6 (`bokehbench ab`, 800x600 hoops, blades6, k = 2, f16, 8 paired
 // rounds, beside another helper's builds), the FLAG frame took 0.925 [0.902, 0.945] (N = 41) and 0.958
 // [0.936, 0.982] (N = 153) of the ivec4 form's time.
 // Order of additions: flag_shape_horizontal_scan() in kernels/flag/flag_shape.cpp, bit for bit.
