@@ -80,7 +80,8 @@ def time_of(doc, backend):
 
 
 def where(doc, backend):
-    device = (doc["context"].get("device") or {}).get("name", "")
+    """A panel's backend, short: the device's full name and driver are in the figure's title line."""
+    device = (doc["context"].get("device") or {}).get("name", "").split(" (")[0]
     return f"GPU ({device})" if backend == "gpu" else "CPU references"
 
 
