@@ -71,7 +71,7 @@ class FlagShape final : public gpu::GpuFilter {
               sizeof(gpu::PassParams)),
         // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 6 the scan's SEGMENT, 7 LAYER_ROWS
         // (0: the full buffer), 8 BOTH_HALVES. Scan: a workgroup is 8 layers of one row segment
-        // (lavapipe's 8 SIMD lanes: the sample's loads serve the whole workgroup).
+        // (lavapipe's 8 SIMD lanes), as the disc's scan.
         horizontal_(frame.ctx,
                     vk::spirv(std::string(scan() ? "flag/horizontal_shape_scan_" : "flag/horizontal_shape_") +
                               to_string(config.precision)),
