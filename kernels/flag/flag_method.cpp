@@ -243,7 +243,8 @@ std::vector<OptionSpec> flag_options() {
            "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
            "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU "
            "devices such as lavapipe masked up to 21 layers (N = 41), scan beyond (other apertures: scan for a "
-           "mirror-symmetric shape of 12 layers or more, else indexed); indexed on GPUs. indexed and masked give "
+           "mirror-symmetric shape of 12 layers or more and for the others beyond 81 layers, else indexed); "
+           "indexed on GPUs. indexed and masked give "
            "the same image bit for bit, scan to f32 rounding",
            0, 0, 0, false, flag_horizontal_bins()},
           {"vertical_order",

@@ -23,27 +23,26 @@ constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage =
 
 }  // namespace
 
-// Auto for a non-disc aperture. GPUs: indexed, as for the disc. Software devices (lavapipe): scan for
-// a mirror-symmetric shape of 12 layers or more (N >= 23), else indexed; never masked. Measured on
-// lavapipe (800x600 hoops, k = 2, f16; beside another helper's builds, so indicative only):
-// - `bokehbench figure9 --aperture blades6 --sweep-choices horizontal_bins`, the horizontal pass's
-//   median ms (indexed / masked / scan) and fraction of the copy probe's bandwidth: N = 21: 102 / 291 /
-//   112 ms (13.0 / 4.6 / 11.9%); N = 41: 230 / 1003 / 187 ms (10.2 / 2.3 / 12.6%); N = 81: 364 / 1860 /
-//   320 ms (12.1 / 2.4 / 13.7%); N = 153: 693 / 6090 / 581 ms (11.7 / 1.3 / 13.9%). Masked (the disc's
-//   auto up to 21 layers) took 2.5-9x indexed's time: its per-layer selects do not pay for a chord load.
-// - `bokehbench ab`, auto as indexed against auto as scan, FLAG frame, 14 paired rounds of process CPU
-//   time, scan / indexed [95%]: blades6 (halved: (N + 1) / 2 layers) N = 21 1.038 [1.017, 1.071], 25
-//   0.907 [0.872, 0.934], 31 0.866 [0.814, 0.935], 41 0.888 [0.866, 0.921], 81 0.873 [0.845, 0.899],
-//   153 0.862 [0.840, 0.886]; blades5 (both halves: N layers) N = 11 1.066 [1.014, 1.130], 21 1.047
-//   [0.996, 1.087], 41 1.001 [0.947, 1.072], 81 0.976 [0.938, 1.017]. The scan's work per pixel grows
-//   with the layers, the indexed bins' with N: with both halves (N layers) it has nothing to gain.
+// Auto for a non-disc aperture. GPUs: indexed, as for the disc. Software devices (lavapipe): scan from 12
+// layers on (N >= 23 halved) for a mirror-symmetric shape; with both halves (N layers) only where the
+// indexed bins run fewer than 4 pixels an invocation (flag_horizontal_block: over 81 layers), since at 4
+// they keep pace with the scan; never masked (2.5-9x indexed's time: its per-layer selects do not pay
+// for a chord load). `bokehbench ab`, auto built as indexed against auto built as scan, alone on a 2-core
+// AMD EPYC at 2.6 GHz, lavapipe, 800x600 hoops, k = 2, f16, FLAG frame in process CPU time, 15 paired
+// rounds, scan / indexed [95%] (results/shape_bins/ab_auto_*_alone.json):
+// - blades6 (halved, (N + 1) / 2 layers): N = 21 1.080 [1.068, 1.114]; 41 0.988 [0.940, 1.024]; 81 0.927
+//   [0.830, 0.947]; 153 0.878 [0.833, 0.910]. (Beside another helper's builds, 14 rounds: 25 0.907, 31
+//   0.866, 41 0.888: results/shape_bins/ab_auto_blades6*.json.)
+// - blades5 (both halves, N layers): N = 21 1.128 [1.074, 1.180]; 41 1.034 [1.010, 1.049]; 81 1.034
+//   [0.987, 1.062]; 101 0.753 [0.710, 0.793]; 121 0.776 [0.714, 0.837]; 153 0.733 [0.707, 0.751].
 constexpr int kSoftwareShapeScanFirstLayers = 12;
 
 FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers,
                                       bool halved) {
   if (bins != FlagHorizontalBins::automatic) return bins;
   if (!device.is_software()) return FlagHorizontalBins::indexed;
-  const bool scan = halved && layers >= kSoftwareShapeScanFirstLayers;
+  const bool indexed_blocked = flag_horizontal_block(std::nullopt, device, layers) < 4;
+  const bool scan = layers >= kSoftwareShapeScanFirstLayers && (halved || indexed_blocked);
   return scan ? FlagHorizontalBins::scan : FlagHorizontalBins::indexed;
 }
 

@@ -16,7 +16,8 @@ std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const 
                                                     const Aperture& aperture);
 // The horizontal pass's binning for a non-disc aperture of `layers` layers, one half of them (halved,
 // FlagShapeTable::halved) or both: `bins` as chosen; auto: indexed on GPUs, on software devices scan
-// for a halved shape of 12 layers or more and indexed otherwise (flag_shape_gpu.cpp has the measurements).
+// for a halved shape of 12 layers or more and for both halves beyond 81 layers, else indexed
+// (flag_shape_gpu.cpp has the measurements).
 FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers,
                                       bool halved);
 // The layer image of a non-disc aperture as make_flag_shape_gpu allocates it: the frame's rows, or

@@ -148,9 +148,10 @@ TEST(FlagShape, DeclaresItsScope) {
 }
 
 // horizontal_bins = auto for a non-disc aperture: on CPU devices scan for a halved (mirror-symmetric)
-// shape from 12 layers on, else indexed (with both halves the scan gains nothing), never masked; indexed
-// on GPUs; an explicit choice as it is. The method's CPU reference and memory model follow it.
-TEST(FlagShape, AutoBinsAreScanForHalvedShapesFromTwelveLayersOnCpuDevices) {
+// shape from 12 layers on and for both halves beyond 81 layers (where the indexed bins drop below 4
+// pixels an invocation), else indexed, never masked; indexed on GPUs; an explicit choice as it is. The
+// method's CPU reference and memory model follow it.
+TEST(FlagShape, AutoBinsAreScanWhereItWasMeasuredFasterOnCpuDevices) {
   vk::DeviceInfo software, gpu;
   software.type = "cpu";
   gpu.type = "discrete";
@@ -159,13 +160,14 @@ TEST(FlagShape, AutoBinsAreScanForHalvedShapesFromTwelveLayersOnCpuDevices) {
   EXPECT_EQ(flag_shape_binning(automatic, software, 12, true), FlagHorizontalBins::scan);
   EXPECT_EQ(flag_shape_binning(automatic, software, 77, true), FlagHorizontalBins::scan);
   EXPECT_EQ(flag_shape_binning(automatic, software, 81, false), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_shape_binning(automatic, software, 82, false), FlagHorizontalBins::scan);
   EXPECT_EQ(flag_shape_binning(automatic, gpu, 77, true), FlagHorizontalBins::indexed);
   EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::masked, software, 77, true), FlagHorizontalBins::masked);
   EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::scan, gpu, 5, false), FlagHorizontalBins::scan);
   // Without a device the model takes lavapipe's choice: N = 23 halves the hexagon into 12 layers.
   const Method& flag = find_method("flag");
   for (const auto& [name, n, table] : {std::tuple{"blades6", 21, "chords"}, std::tuple{"blades6", 23, "row sections"},
-                                       std::tuple{"blades5", 81, "chords"}}) {
+                                       std::tuple{"blades5", 81, "chords"}, std::tuple{"blades5", 101, "row sections"}}) {
     FilterOptions o = flag.defaults({n, 2});
     o.aperture = parse_aperture(name);
     EXPECT_EQ(flag.gpu_memory(o, 64, 48, nullptr).details["horizontal_table"], table) << name << " N " << n;
