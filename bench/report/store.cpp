@@ -17,6 +17,7 @@
 #include <pqxx/pqxx>
 #endif
 
+#include "fnv1a.hpp"  // stable across machines and builds (std::hash is not): sweep identities, lock keys
 #include "intervals.hpp"
 #include "report.hpp"
 #include "runner.hpp"
@@ -261,14 +262,6 @@ std::vector<double> split(const std::string& text) {
   return out;
 }
 
-// FNV-1a, 64 bits: a digest that is the same on every machine and build (std::hash is not), for the
-// sweep identity's config and PostgreSQL's advisory lock key.
-std::uint64_t fnv1a64(const std::string& text) {
-  std::uint64_t h = 14695981039346656037ull;
-  for (unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
-  return h;
-}
-
 }  // namespace
 
 std::unique_ptr<Store> Store::open(const std::string& url, bool create) {
@@ -379,7 +372,7 @@ std::int64_t Store::append(const RunRow& run, const std::vector<PointRow>& point
       // IMMEDIATE already admits one writer at a time), so the second always sees the first.
       if (c.kind() == "postgresql")
         c.query("SELECT pg_advisory_xact_lock($1)",
-                {std::to_string(static_cast<std::int64_t>(fnv1a64(run.sweep_identity + "\n" + run.shard)))});
+                {std::to_string(static_cast<std::int64_t>(fnv1a(run.sweep_identity + "\n" + run.shard)))});
       const auto earlier = c.query("SELECT r.id FROM shard_runs s JOIN runs r ON r.id = s.run_id WHERE s.identity = $1 AND "
                                    "r.shard = $2 AND r.status = 'complete' ORDER BY r.id LIMIT 1",
                                    {run.sweep_identity, run.shard});
@@ -582,7 +575,7 @@ std::string sweep_identity_of(const nlohmann::json& doc) {
   // nlohmann's objects keep their keys sorted: the same config dumps the same text whatever wrote it.
   return fmt::format("{} {} {} config:{:016x}", doc.value("schema", std::string()),
                      context.is_object() ? context.value("git_commit", std::string("unknown")) : "unknown",
-                     job.empty() ? "-" : job, fnv1a64(config.dump()));
+                     job.empty() ? "-" : job, fnv1a(config.dump()));
 }
 
 std::vector<PointRow> points_of(const nlohmann::json& doc) {

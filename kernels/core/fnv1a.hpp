@@ -16,4 +16,11 @@ inline void fnv1a(std::uint64_t& hash, const void* data, std::size_t bytes) {
 
 inline void fnv1a(std::uint64_t& hash, std::string_view text) { fnv1a(hash, text.data(), text.size()); }
 
+// The hash of one text on its own.
+inline std::uint64_t fnv1a(std::string_view text) {
+  std::uint64_t hash = kFnv1aOffset;
+  fnv1a(hash, text);
+  return hash;
+}
+
 }  // namespace bokeh
