@@ -2,12 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <stdexcept>
+#include <utility>
 
 #include <Imath/half.h>
 #include <fmt/format.h>
 
+#include "flag_scan.hpp"
 #include "half_float.hpp"
 #include "scratch.hpp"
 #include "simd.hpp"
@@ -165,41 +166,6 @@ FlagLayers flag_horizontal(const Image& packed, const GatherPattern& p, LayerPre
   return out;
 }
 
-void flag_scan_layers(const Image& packed, const GatherPattern& p, LayerPrecision precision, int segment,
-                      int threads, FlagLayers& out,
-                      const std::function<std::function<bool(int x, int z, int& first, int& last)>(int y)>& row_intervals) {
-  const int n = p.half(), k = p.spacing_px, w = packed.width;
-  parallel_rows(packed.height, threads, [&](int y) {
-    const auto interval = row_intervals(y);
-    std::vector<float> diff(static_cast<std::size_t>(segment) * 3);
-    for (int phase = 0; phase < k; ++phase)
-      for (int c0 = 0; phase + c0 * k < w; c0 += segment) {
-        const int x0 = phase + c0 * k;  // column t of the segment is x0 + t k
-        const int j_lo = std::max(-n, -c0), j_hi = std::min(segment - 1 + n, (w - 1 - x0) / k);
-        for (int z = 0; z < out.layers; ++z) {
-          std::fill(diff.begin(), diff.end(), 0.0f);
-          for (int j = j_lo; j <= j_hi; ++j) {
-            int first = 0, last = 0;
-            if (!interval(x0 + j * k, z, first, last) || j + last < 0 || j + first >= segment) continue;
-            const float* s = packed.px(x0 + j * k, y);
-            float* start = diff.data() + static_cast<std::size_t>(std::max(j + first, 0)) * 3;
-            for (int c = 0; c < 3; ++c) start[c] += s[c];
-            if (j + last + 1 < segment) {
-              float* end = diff.data() + static_cast<std::size_t>(j + last + 1) * 3;
-              for (int c = 0; c < 3; ++c) end[c] -= s[c];
-            }
-          }
-          float running[3] = {0, 0, 0};
-          for (int t = 0; t < segment && x0 + t * k < w; ++t)
-            for (int c = 0; c < 3; ++c) {
-              running[c] += diff[static_cast<std::size_t>(t) * 3 + c];
-              out.at(x0 + t * k, y, z)[c] = round_layer_value(running[c], precision, c);
-            }
-        }
-      }
-  });
-}
-
 FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& p, LayerPrecision precision, int segment,
                                 int threads) {
   if (is_bracketed(precision))
@@ -208,23 +174,20 @@ FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& p, Lay
   if (segment < 1) throw std::invalid_argument("flag_horizontal_scan: segment must be >= 1 column");
   check_layer_input(packed, precision);
   const int n = p.half(), k = p.spacing_px, w = packed.width, max_index = 2 * n * n;
-  FlagLayers out{w, packed.height, p.layers(), {}, {}, {}};
-  out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * out.layers * 3, 0.0f);
-  flag_scan_layers(packed, p, precision, segment, threads, out, [&](int y) {
+  return flag_scan_layers(packed, p, p.layers(), precision, segment, threads, [&](int y) {
     // Each sample's disc index once a row; layer z: the columns within isqrt(index - z^2) of it, up to n.
-    auto index = std::make_shared<std::vector<int>>(static_cast<std::size_t>(w));
+    std::vector<int> index(static_cast<std::size_t>(w));
     for (int x = 0; x < w; ++x) {
       const float r = packed.px(x, y)[3];
-      (*index)[static_cast<std::size_t>(x)] = disc_index(r * r, k, max_index);
+      index[static_cast<std::size_t>(x)] = disc_index(r * r, k, max_index);
     }
-    return [index, n](int x, int z, int& first, int& last) {
-      const int d = (*index)[static_cast<std::size_t>(x)] - z * z;
+    return [index = std::move(index), n](int x, int z, int& first, int& last) {
+      const int d = index[static_cast<std::size_t>(x)] - z * z;
       if (d < 0) return false;
       last = static_cast<int>(std::min<std::int64_t>(isqrt(d), n)), first = -last;
       return true;
     };
   });
-  return out;
 }
 
 Image flag_vertical(const FlagLayers& layers, const GatherPattern& p, int threads, bool both_halves) {

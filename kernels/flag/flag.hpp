@@ -8,7 +8,6 @@
 // stores one layer per |dy| = z k, ceil(N/2) = (N + 1) / 2 layers instead of N, and the vertical pass
 // reads layer |j| for both row y + j k and row y - j k. There is nothing further to halve for discs.
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -89,17 +88,6 @@ constexpr int kFlagScanSegment = 512;
 // flag_horizontal, in another order. Throws std::invalid_argument for bracketed precisions.
 FlagLayers flag_horizontal_scan(const Image& packed, const GatherPattern& pattern, LayerPrecision precision,
                                 int segment = kFlagScanSegment, int threads = default_cpu_threads());
-// The scan binning's order of additions, shared by flag_horizontal_scan (the disc) and
-// flag_shape_horizontal_scan (flag_shape.hpp), as the GPU's horizontal_scan.comp and
-// horizontal_shape_scan.comp share scan_segment.glsl: per row, lattice phase, segment of `segment`
-// columns at stride k and layer z < out.layers, each sample j (column x0 + j k) within n columns of the
-// segment whose interval of output columns [j + first, j + last] is not empty adds itself at the
-// interval's start (clamped to the segment) and subtracts itself past its end, in row order; a prefix
-// sum along the segment gives the layer, rounded as `precision` stores it. row_intervals(y) returns the
-// row's interval(x, z, first, last): false when the sample at column x reaches no column of layer z.
-void flag_scan_layers(const Image& packed, const GatherPattern& pattern, LayerPrecision precision, int segment,
-                      int threads, FlagLayers& out,
-                      const std::function<std::function<bool(int x, int z, int& first, int& last)>(int y)>& row_intervals);
 // Per pixel, rows y + j k, j = -n .. n: layer |j| (one half: the disc, mirror-symmetric shapes) or, with
 // both_halves (shapes that are not mirror-symmetric, kernels/flag/flag_shape.hpp), layer n - j.
 Image flag_vertical(const FlagLayers& layers, const GatherPattern& pattern, int threads = default_cpu_threads(),

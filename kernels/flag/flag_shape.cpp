@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "flag_scan.hpp"
+
 namespace bokeh {
 
 namespace {
@@ -191,9 +193,7 @@ FlagLayers flag_shape_horizontal_scan(const Image& packed, const FlagShapeTable&
         throw std::invalid_argument(fmt::format("flag_shape_horizontal_scan: pixel ({}, {}) has area {}, not a whole "
                                                 "number of the {}x{} lattice's offsets",
                                                 x, y, a, table.side, table.side));
-  FlagLayers out{w, packed.height, layers, {}, {}, {}};
-  out.rgb.assign(static_cast<std::size_t>(w) * out.height * layers * 3, 0.0f);
-  flag_scan_layers(packed, p, precision, segment, threads, out, [&](int y) {
+  return flag_scan_layers(packed, p, layers, precision, segment, threads, [&](int y) {
     // Layer z: the output columns t = j + first .. j + last of sample j's row section (offset (t - j) k:
     // lattice column t - j + n), none where the section is 0.
     return [&packed, &table, n, y](int x, int z, int& first, int& last) {
@@ -203,7 +203,6 @@ FlagLayers flag_shape_horizontal_scan(const Image& packed, const FlagShapeTable&
       return true;
     };
   });
-  return out;
 }
 
 Image flag_shape_blur(const Image& color, const Image& radius_px, const FlagShapeTable& table,
