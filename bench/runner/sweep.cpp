@@ -142,16 +142,21 @@ std::pair<int, int> parse_shard(const std::string& text, const std::string& flag
   return {index, count};
 }
 
+namespace {
+
+// A scheduler variable's value, "" when unset or empty: from env_or_null (the tests' environment) or the process's.
+std::string scheduler_env(const char* name, const std::function<const char*(const char*)>& env_or_null) {
+  const char* v = env_or_null ? env_or_null(name) : std::getenv(name);
+  return v ? v : "";
+}
+
+}  // namespace
+
 std::string resolve_auto_shard(const std::string& text, const std::function<const char*(const char*)>& env_or_null) {
-  const auto env = [&](const char* name) -> const char* {
-    const char* v = env_or_null ? env_or_null(name) : std::getenv(name);
-    return v && *v ? v : nullptr;
-  };
   // A variable's whole value as a non-negative integer, or a message naming it.
   const auto integer = [&](const char* name) -> std::optional<long> {
-    const char* v = env(name);
-    if (!v) return std::nullopt;
-    const std::string value = v;
+    const std::string value = scheduler_env(name, env_or_null);
+    if (value.empty()) return std::nullopt;
     if (value.size() > 9 || value.find_first_not_of("0123456789") != std::string::npos)
       throw std::invalid_argument(fmt::format("{}: {}='{}' is not a non-negative integer", text, name, value));
     return std::stol(value);
@@ -216,12 +221,8 @@ std::string resolve_auto_shard(const std::string& text, const std::function<cons
 }
 
 std::string scheduler_sweep_id(const std::function<const char*(const char*)>& env_or_null) {
-  const auto env = [&](const char* name) -> std::string {
-    const char* v = env_or_null ? env_or_null(name) : std::getenv(name);
-    return v ? v : "";
-  };
-  if (const std::string id = env("BOKEH_SWEEP_ID"); !id.empty()) return id;
-  if (const std::string job = env("SLURM_ARRAY_JOB_ID"); !job.empty()) return "slurm:" + job;
+  if (const std::string id = scheduler_env("BOKEH_SWEEP_ID", env_or_null); !id.empty()) return id;
+  if (const std::string job = scheduler_env("SLURM_ARRAY_JOB_ID", env_or_null); !job.empty()) return "slurm:" + job;
   return "";
 }
 
