@@ -59,6 +59,14 @@ double largest(const Image& image) {
   return m;
 }
 
+// The scene's lens drawing `aperture`, fitted so that the largest CoC is `reach` times the pattern's
+// largest radius (beyond 1: radii clamped at the pattern's, so every area occurs).
+Lens shape_lens(const Scene& s, const GatherPattern& pattern, const Aperture& aperture, double reach = 1.2) {
+  Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * reach);
+  lens.aperture = aperture;
+  return lens;
+}
+
 // FLAG by chords against naive's shape test on the same float gauges, every shape, f32 and the
 // per-value formats: each output sums non-negative layer values (N of them at most) whose own
 // rounding is at most 2^-11 (f16) or 2^-6 (r11g11b10f blue) of themselves, so |FLAG - naive| <= that
@@ -324,7 +332,7 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
 
   const Scene s = make_scene("hoops", 61, 45);
   for (const char* name : {"blades5", "blades6"})
-    for (double bins : {0.0, 3.0}) {  // auto (masked here), scan
+    for (double bins : {0.0, 3.0}) {  // auto (indexed here), scan
       FilterOptions o = flag.defaults({9, 2});
       o.aperture = parse_aperture(name);
       o.values["horizontal_bins"] = bins;
@@ -363,8 +371,7 @@ TEST(FlagShape, GpuMatchesCpuReference) {
           o.aperture = parse_aperture(name);
           o.values["horizontal_block"] = block;
           o.values["horizontal_bins"] = bins;
-          Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-          lens.aperture = o.aperture;
+          const Lens lens = shape_lens(s, pattern, o.aperture);
           const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, o, 2);
           std::vector<vk::PassTime> passes;
           const Image gpu = run_gpu(context(), flag, s.color, s.depth_m, lens, o, &passes);
@@ -385,8 +392,7 @@ TEST(FlagShape, MaskedBinsMatchIndexedBitForBit) {
   for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}})
     for (const char* name : {"blades5", "blades6", "blades7-rot15-curv0.3"}) {
       SCOPED_TRACE(std::string(name) + " N " + std::to_string(pattern.size_n));
-      Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-      lens.aperture = parse_aperture(name);
+      const Lens lens = shape_lens(s, pattern, parse_aperture(name));
       gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
       vk::TimestampQueries timer(context(), 16);
       FilterOptions o = flag.defaults(pattern);
@@ -419,8 +425,7 @@ TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
       o.precision = precision;
       o.aperture = parse_aperture(name);
       o.values["horizontal_bins"] = bins;
-      Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-      lens.aperture = o.aperture;
+      const Lens lens = shape_lens(s, pattern, o.aperture);
       gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
       vk::TimestampQueries timer(context(), 16);
       auto full = flag.make_gpu(frame, o);
@@ -467,8 +472,7 @@ void expect_scan_equals_its_mirror(const Scene& s, const GatherPattern& pattern,
   o.precision = "f32";
   o.aperture = parse_aperture(aperture);
   o.values["horizontal_bins"] = 3;  // scan
-  Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * reach);
-  lens.aperture = o.aperture;
+  const Lens lens = shape_lens(s, pattern, o.aperture, reach);
   gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
   vk::TimestampQueries timer(context(), 16);
   auto filter = flag.make_gpu(frame, o);
