@@ -122,6 +122,14 @@ FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::De
   return layers <= kSoftwareMaskedFirstLayers ? FlagHorizontalBins::masked : FlagHorizontalBins::scan;
 }
 
+std::uint32_t flag_horizontal_invocations_x(FlagHorizontalBins bins, int width_px, int spacing_px, int layers,
+                                            int block) {
+  const auto w = static_cast<std::uint32_t>(width_px), k = static_cast<std::uint32_t>(spacing_px);
+  if (bins != FlagHorizontalBins::scan) return ceil_div(w, static_cast<std::uint32_t>(block) * k) * k;
+  const std::uint32_t segments = ceil_div(ceil_div(w, k), static_cast<std::uint32_t>(kFlagScanSegment));
+  return segments * k * ceil_div(static_cast<std::uint32_t>(layers), 8u) * 8u;
+}
+
 const std::vector<std::string>& flag_layer_buffers() {
   static const std::vector<std::string> buffers = {"full", "streamed"};
   return buffers;
@@ -398,16 +406,9 @@ class Flag final : public gpu::GpuFilter {
   void record_horizontal(VkCommandBuffer cmd, const PassParams& low, int y0, int y1) const {
     PassParams band = low;
     band.band_y0_px = y0, band.band_y1_px = y1;
-    const auto lw = static_cast<std::uint32_t>(low.width_px), rows = static_cast<std::uint32_t>(y1 - y0);
-    const std::uint32_t k = static_cast<std::uint32_t>(pattern_.spacing_px);
-    if (bins_ == FlagHorizontalBins::scan) {
-      // Per row: k phases x ceil(ceil(W / k) / SEGMENT) segments x ceil(layers / 8) workgroups of 8.
-      const std::uint32_t segments = ceil_div(ceil_div(lw, k), static_cast<std::uint32_t>(kFlagScanSegment));
-      horizontal_->dispatch(cmd, &band, segments * k * ceil_div(static_cast<std::uint32_t>(layer_count_), 8u) * 8u,
-                            rows);
-    } else {
-      horizontal_->dispatch(cmd, &band, ceil_div(lw, static_cast<std::uint32_t>(outputs_) * k) * k, rows);
-    }
+    horizontal_->dispatch(cmd, &band,
+                          flag_horizontal_invocations_x(bins_, low.width_px, pattern_.spacing_px, layer_count_, outputs_),
+                          static_cast<std::uint32_t>(y1 - y0));
   }
 
   // FLAG's grid (full or reduced resolution) for the frame region `full`, with its pattern's n.

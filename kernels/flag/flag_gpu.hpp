@@ -41,6 +41,11 @@ const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "
 enum class FlagHorizontalBins { automatic, indexed, masked, scan };
 // The binning the pass runs: `bins` as chosen, auto's choice by device and layers.
 FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
+// Invocations along a row of the horizontal pass (the disc's and other apertures'), `bins` resolved:
+// scan, k phases x ceil(ceil(W / k) / kFlagScanSegment) segments x ceil(layers / 8) workgroups of 8
+// (shaders/flag/scan_segment.glsl); else ceil(W / (block k)) k, a block of pixels at stride k each.
+std::uint32_t flag_horizontal_invocations_x(FlagHorizontalBins bins, int width_px, int spacing_px, int layers,
+                                            int block);
 
 // The order the vertical pass's workgroups take their tiles, the method's option "vertical_order".
 // A layer row is read twice, by output rows y - j k and y + j k; in "rows" (row-major tiles, as

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "ceil_div.hpp"
 #include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
@@ -111,7 +110,8 @@ class FlagShape final : public gpu::GpuFilter {
     const auto w = static_cast<std::uint32_t>(params.width_px), h = static_cast<std::uint32_t>(params.height_px);
     pack_.dispatch(cmd, &params, w, h);
     timer.end_pass(cmd, "shape_pack");
-    const std::uint32_t horizontal_x = horizontal_invocations_x(params);
+    const std::uint32_t horizontal_x =
+        flag_horizontal_invocations_x(bins_, params.width_px, params.spacing_px, table_.layers(), outputs_);
     if (!streamed_) {
       horizontal_.dispatch(cmd, &params, horizontal_x, h);
       timer.end_pass(cmd, "horizontal");
@@ -149,14 +149,6 @@ class FlagShape final : public gpu::GpuFilter {
   bool scan() const { return bins_ == FlagHorizontalBins::scan; }
   // LAYER_ROWS (shaders/flag/layer_rows.glsl): the ring's rows, or 0 for the full buffer.
   std::int32_t layer_ring_rows() const { return streamed_ ? rows_.extent.height : 0; }
-  // Invocations of the horizontal pass along a row: scan, k phases x ceil(ceil(W / k) / SEGMENT)
-  // segments x ceil(layers / 8) workgroups of 8 (flag_gpu.cpp's); else a block of pixels each.
-  std::uint32_t horizontal_invocations_x(const gpu::PassParams& params) const {
-    const auto w = static_cast<std::uint32_t>(params.width_px), k = static_cast<std::uint32_t>(params.spacing_px);
-    if (!scan()) return ceil_div(w, static_cast<std::uint32_t>(outputs_) * k) * k;
-    const std::uint32_t segments = ceil_div(ceil_div(w, k), static_cast<std::uint32_t>(kFlagScanSegment));
-    return segments * k * ceil_div(static_cast<std::uint32_t>(table_.layers()), 8u) * 8u;
-  }
 
   FlagHorizontalBins bins_;  // as run (never automatic)
   std::int32_t outputs_;     // pixels per invocation of the horizontal pass (scan: 1, unused)
