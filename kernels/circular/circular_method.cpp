@@ -164,7 +164,7 @@ Method circular_method(int components) {
                adaptive};
   m.device = [](const FilterOptions&) {
     vk::DeviceRequirements needs;
-    needs.subgroup_arithmetic = true;  // the layers pass reduces channel maxima with subgroupMax
+    needs.subgroup_operations = VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;  // the layers pass reduces channel maxima with subgroupMax
     return needs;
   };
   // Every function below parses the options once (circular_config) and reads only the config.

@@ -109,17 +109,23 @@ const std::vector<std::string>& flag_horizontal_bins() {
 // Scan against the others on lavapipe, the same frames interleaved (800x600 hoops, k = 2, f16, the
 // horizontal pass's median over 7 rounds, on a loaded machine whose times spread up to 2x; ratios to
 // indexed): N = 21 masked 0.63, scan 0.78; N = 41 masked 0.77, scan 0.71; N = 81 masked 8.9, scan
-// 0.84; N = 121 scan 0.71. Masked up to 21 layers (N = 41), scan beyond; never more than ~1.4x:
-// lavapipe turns each event into a per-lane scalar read and write of the difference array, as it
-// does each indexed bin, and a pixel takes about as many events (2 per layer) as samples (N).
-constexpr int kSoftwareMaskedFirstLayers = 21;
+// 0.84; N = 121 scan 0.71. Lavapipe turns each event into a per-lane scalar read and write of the
+// difference array, as it does each indexed bin, and a pixel takes about as many events (2 per layer)
+// as samples (N). Since the scan's lanes hand samples on by shuffle (one load a sample, not 8), masked
+// only up to 13 layers: `bokehbench ab`, auto built as today against auto built as scan, alone on a
+// 2-core AMD EPYC at 2.6 GHz, FLAG frame in process CPU time, scan / masked [95%]: N = 21 1.076
+// [1.054, 1.098]; 23 1.000; 25 1.002; 27 0.955 [0.920, 0.966]; 29 0.877 [0.845, 0.890]; 31 0.880;
+// 41 0.946 [0.938, 0.971] (results/scan_shuffle/ab_auto_disc_*.json).
+constexpr int kSoftwareMaskedFirstLayers = 13;
 
 FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
   if (bins != FlagHorizontalBins::automatic) return bins;
   // A GPU's L1 cache serves the indexed bins (a register file or cache line per pixel) at one add
   // per sample; the scan's re-reads of each sample per group of 8 layers would only add loads there.
   if (!device.is_software()) return FlagHorizontalBins::indexed;
-  return layers <= kSoftwareMaskedFirstLayers ? FlagHorizontalBins::masked : FlagHorizontalBins::scan;
+  if (layers <= kSoftwareMaskedFirstLayers) return FlagHorizontalBins::masked;
+  return device.has_subgroup_operations(kFlagScanSubgroupOperations) ? FlagHorizontalBins::scan
+                                                                     : FlagHorizontalBins::indexed;
 }
 
 std::uint32_t flag_horizontal_invocations_x(FlagHorizontalBins bins, int width_px, int spacing_px, int layers,

@@ -31,14 +31,19 @@ int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& de
 // array, which lavapipe turns into a scalar load and store per lane. "scan"
 // (shaders/flag/horizontal_scan.comp): per layer, interval sums from a difference array and a prefix
 // sum along a row segment of kFlagScanSegment columns: O(N) per pixel with each sample loaded once
-// per 8 layers; the same samples per layer in another order of additions (flag_horizontal_scan()
-// mirrors it bit for bit; bracketed precisions quantise its values with the bracket pass's ranges,
-// which sum in the bins' order: within one code). "auto": on CPU devices (lavapipe) masked up to 21
-// layers (N = 41), scan beyond; on GPUs indexed. flag_gpu.cpp has the measurements. Non-disc apertures
+// per 8 layers by one lane and handed to the others; the same samples per layer in another order of
+// additions (flag_horizontal_scan() mirrors it bit for bit; bracketed precisions quantise its values
+// with the bracket pass's ranges, which sum in the bins' order: within one code). "auto": on CPU
+// devices (lavapipe) masked up to 13 layers (N = 25), scan beyond (indexed without the scan's subgroup
+// operations); on GPUs indexed. flag_gpu.cpp has the measurements. Non-disc apertures
 // choose their own (flag_shape_binning, flag_shape_gpu.hpp).
 const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked", "scan"
 // The option's value; the enumerators in the order of flag_horizontal_bins().
 enum class FlagHorizontalBins { automatic, indexed, masked, scan };
+// The scan's lanes load consecutive samples and hand them to each other (subgroupBallot, subgroupShuffle):
+// a device without these runs the other binnings (auto) or refuses scan.
+constexpr VkSubgroupFeatureFlags kFlagScanSubgroupOperations =
+    VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
 // The binning the pass runs: `bins` as chosen, auto's choice by device and layers.
 FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 // Invocations along a row of the horizontal pass (the disc's and other apertures'), `bins` resolved:

@@ -164,6 +164,7 @@ const vk::DeviceInfo& software_device() {
   static const vk::DeviceInfo device = [] {
     vk::DeviceInfo d;
     d.type = "cpu";
+    d.subgroup_operations = kFlagScanSubgroupOperations;
     return d;
   }();
   return device;
@@ -172,7 +173,7 @@ const vk::DeviceInfo& software_device() {
 // How the CPU reference sums a non-disc aperture's horizontal pass: in the scan's order where the
 // binning resolves to scan (auto as on lavapipe: the reference has no device), else by chords.
 FlagShapeSums cpu_shape_sums(const FlagConfig& c, const FlagShapeTable& table) {
-  return flag_shape_binning(c.horizontal_bins, software_device(), table.layers(), table.halved) ==
+  return flag_shape_binning(c.horizontal_bins, software_device(), table.layers()) ==
                  FlagHorizontalBins::scan
              ? FlagShapeSums::scan
              : FlagShapeSums::chords;
@@ -196,8 +197,8 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
   // The horizontal pass's table: the row sections (scan) or the chords, as the binning resolves on
   // this device (no device: lavapipe's choice).
   const bool halved = layer_count == c.pattern.layers();
-  const bool scan = flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(), layer_count,
-                                       halved) == FlagHorizontalBins::scan;
+  const bool scan = flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(), layer_count) ==
+                    FlagHorizontalBins::scan;
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
                       tables = c.pattern.samples_per_pixel() * sizeof(float) +
                                FlagShapeTable::bytes_for(c.pattern, layer_count, scan);
@@ -241,11 +242,10 @@ std::vector<OptionSpec> flag_options() {
            "bins[z] += sample (one add per sample, the paper's O(N + n)); masked: every bin tests the sample "
            "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
            "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
-           "each sample loaded once per 8 layers; the same samples in another order of additions); auto: on CPU "
-           "devices such as lavapipe masked up to 21 layers (N = 41), scan beyond (other apertures: scan for a "
-           "mirror-symmetric shape of 12 layers or more and for the others beyond 81 layers, else indexed); "
-           "indexed on GPUs. indexed and masked give "
-           "the same image bit for bit, scan to f32 rounding",
+           "each sample loaded once per 8 layers and handed on by subgroup shuffle; the same samples in another "
+           "order of additions; needs subgroup ballot and shuffle); auto: on CPU devices such as lavapipe masked "
+           "up to 13 layers (N = 25), scan beyond (other apertures: scan from 7 layers, else indexed); indexed "
+           "on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
            0, 0, 0, false, flag_horizontal_bins()},
           {"vertical_order",
            "flag: the order the GPU vertical pass's workgroups take their tiles. rows: row-major; columns: down "
@@ -309,7 +309,9 @@ void declare_flag(std::vector<Method>& methods) {
     const FlagConfig c = flag_config(o);
     vk::DeviceRequirements needs;
     needs.storage_image_3d_formats = {layer_format(c.precision)};
-    needs.subgroup_arithmetic = c.adaptive;  // the tile map's bound is shared across a subgroup
+    if (c.adaptive) needs.subgroup_operations |= VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;  // the tile map's bound, shared
+    // An explicit scan; auto takes it only on a device that has them.
+    if (c.horizontal_bins == FlagHorizontalBins::scan) needs.subgroup_operations |= kFlagScanSubgroupOperations;
     return needs;
   };
   // Any convex aperture by per-layer chord extents (flag_shape.hpp); flag_shape_unsupported says with what.

@@ -22,26 +22,24 @@ constexpr VkDescriptorType kBuffer = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kImage =
 
 }  // namespace
 
-// Auto for a non-disc aperture. GPUs: indexed, as for the disc. Software devices (lavapipe): scan from 12
-// layers on (N >= 23 halved) for a mirror-symmetric shape; with both halves (N layers) only where the
-// indexed bins run fewer than 4 pixels an invocation (flag_horizontal_block: over 81 layers), since at 4
-// they keep pace with the scan; never masked (2.5-9x indexed's time: its per-layer selects do not pay
-// for a chord load). `bokehbench ab`, auto built as indexed against auto built as scan, alone on a 2-core
-// AMD EPYC at 2.6 GHz, lavapipe, 800x600 hoops, k = 2, f16, FLAG frame in process CPU time, 15 paired
-// rounds, scan / indexed [95%] (results/shape_bins/ab_auto_*_alone.json):
-// - blades6 (halved, (N + 1) / 2 layers): N = 21 1.080 [1.068, 1.114]; 41 0.988 [0.940, 1.024]; 81 0.927
-//   [0.830, 0.947]; 153 0.878 [0.833, 0.910]. (Beside another helper's builds, 14 rounds: 25 0.907, 31
-//   0.866, 41 0.888: results/shape_bins/ab_auto_blades6*.json.)
-// - blades5 (both halves, N layers): N = 21 1.128 [1.074, 1.180]; 41 1.034 [1.010, 1.049]; 81 1.034
-//   [0.987, 1.062]; 101 0.753 [0.710, 0.793]; 121 0.776 [0.714, 0.837]; 153 0.733 [0.707, 0.751].
-constexpr int kSoftwareShapeScanFirstLayers = 12;
+// Auto for a non-disc aperture. GPUs: indexed, as for the disc. Software devices (lavapipe) with the
+// scan's subgroup operations: scan from 7 layers on, whether the shape is halved or not; never masked
+// (2.5-9x indexed's time: its per-layer selects do not pay for a chord load). Once the scan's lanes hand
+// samples on by shuffle it beat the indexed bins wherever they had kept pace before (both halves up to
+// 81 layers; halved under 12). `bokehbench ab`, auto built as today against auto built as scan, alone on
+// a 2-core AMD EPYC at 2.6 GHz, lavapipe, 800x600 hoops, k = 2, f16, FLAG frame in process CPU time,
+// scan / indexed [95%] (results/scan_shuffle/ab_auto_blades*.json):
+// - blades6 (halved, (N + 1) / 2 layers): N = 5 1.233 [1.204, 1.250]; 9 1.049 [0.950, 1.073]; 13 0.910
+//   [0.894, 0.948]; 21 0.897 [0.878, 0.919] (N = 17: scan already).
+// - blades5 (both halves, N layers): N = 9 0.976 [0.927, 1.002]; 21 0.930 [0.892, 0.973]; 41 0.920
+//   [0.911, 0.929]; 61 0.849 [0.782, 0.873]; 81 0.837 [0.773, 0.866].
+constexpr int kSoftwareShapeScanFirstLayers = 7;
 
-FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers,
-                                      bool halved) {
+FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
   if (bins != FlagHorizontalBins::automatic) return bins;
   if (!device.is_software()) return FlagHorizontalBins::indexed;
-  const bool indexed_blocked = flag_horizontal_block(std::nullopt, device, layers) < 4;
-  const bool scan = layers >= kSoftwareShapeScanFirstLayers && (halved || indexed_blocked);
+  const bool scan =
+      layers >= kSoftwareShapeScanFirstLayers && device.has_subgroup_operations(kFlagScanSubgroupOperations);
   return scan ? FlagHorizontalBins::scan : FlagHorizontalBins::indexed;
 }
 
@@ -52,7 +50,7 @@ class FlagShape final : public gpu::GpuFilter {
   FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture)
       : frame_(frame),
         table_(aperture, config.pattern),
-        bins_(flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers(), table_.halved)),
+        bins_(flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers())),
         outputs_(scan() ? 1 : flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
         sorted_(vk::make_storage_buffer(frame.ctx, table_.lattice.sorted.size() * sizeof(float), "sorted aperture gauges")),
         // The scan reads the row sections, the other binnings the chords: only that one is on the device.

@@ -14,12 +14,10 @@ struct FlagConfig;
 // configurations Method::aperture_unsupported accepts (per-value precisions, scale 1, adaptive off).
 std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
                                                     const Aperture& aperture);
-// The horizontal pass's binning for a non-disc aperture of `layers` layers, one half of them (halved,
-// FlagShapeTable::halved) or both: `bins` as chosen; auto: indexed on GPUs, on software devices scan
-// for a halved shape of 12 layers or more and for both halves beyond 81 layers, else indexed
-// (flag_shape_gpu.cpp has the measurements).
-FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers,
-                                      bool halved);
+// The horizontal pass's binning for a non-disc aperture of `layers` layers: `bins` as chosen; auto:
+// indexed on GPUs, on software devices scan from 7 layers on where the device has the scan's subgroup
+// operations, else indexed (flag_shape_gpu.cpp has the measurements).
+FlagHorizontalBins flag_shape_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 // The layer image of a non-disc aperture as make_flag_shape_gpu allocates it: the frame's rows, or
 // (layer_buffer = streamed) the ring's B + 2 n k rows and the band B (band_rows 0: the full buffer).
 FlagStreamRing flag_shape_layer_rows(const FlagConfig& config, int layers, int width_px, int height_px,

@@ -31,7 +31,7 @@ void declare_naive(std::vector<Method>& methods) {
   // Every function below parses the options once (naive_config) and reads only the NaiveConfig.
   m.device = [](const FilterOptions& o) {
     vk::DeviceRequirements needs;
-    needs.subgroup_arithmetic = naive_config(o).adaptive;
+    if (naive_config(o).adaptive) needs.subgroup_operations = VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
     return needs;
   };
   // Any aperture (issue 23): a shape test per sample against the aperture's gauge of its offset, weights

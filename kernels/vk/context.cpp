@@ -51,7 +51,8 @@ int preference(const DeviceInfo& d) {
 }
 
 DeviceInfo describe(VkPhysicalDevice device, int index) {
-  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+  VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES, &subgroup};
   VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   props.pNext = &driver;
   vkGetPhysicalDeviceProperties2(device, &props);
@@ -71,6 +72,8 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   info.max_uniform_buffer_range_bytes = p.limits.maxUniformBufferRange;
   info.max_texel_buffer_elements = p.limits.maxTexelBufferElements;
   info.max_image_dimension_3d = p.limits.maxImageDimension3D;
+  if (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) info.subgroup_operations = subgroup.supportedOperations;
+  info.subgroup_size = subgroup.subgroupSize;
 
   std::uint32_t family_count = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(device, &family_count, nullptr);
@@ -89,17 +92,23 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   return info;
 }
 
+// "subgroup ballot, shuffle": the named operation classes among `flags`.
+std::string subgroup_operations_text(VkSubgroupFeatureFlags flags) {
+  static const std::pair<VkSubgroupFeatureFlagBits, const char*> names[] = {
+      {VK_SUBGROUP_FEATURE_BASIC_BIT, "basic"},       {VK_SUBGROUP_FEATURE_VOTE_BIT, "vote"},
+      {VK_SUBGROUP_FEATURE_ARITHMETIC_BIT, "arithmetic"}, {VK_SUBGROUP_FEATURE_BALLOT_BIT, "ballot"},
+      {VK_SUBGROUP_FEATURE_SHUFFLE_BIT, "shuffle"},   {VK_SUBGROUP_FEATURE_SHUFFLE_RELATIVE_BIT, "relative shuffle"},
+      {VK_SUBGROUP_FEATURE_CLUSTERED_BIT, "clustered"}, {VK_SUBGROUP_FEATURE_QUAD_BIT, "quad"}};
+  std::string text;
+  for (const auto& [bit, name] : names)
+    if (flags & bit) text += (text.empty() ? "subgroup " : ", ") + std::string(name);
+  return text;
+}
+
 std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) {
   std::vector<std::string> missing;
-  if (wanted.subgroup_arithmetic) {
-    VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-    VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-    props.pNext = &subgroup;
-    vkGetPhysicalDeviceProperties2(device, &props);
-    if (!(subgroup.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) ||
-        !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT))
-      missing.push_back("subgroup arithmetic in compute shaders");
-  }
+  const VkSubgroupFeatureFlags subgroup_missing = wanted.subgroup_operations & ~describe(device, -1).subgroup_operations;
+  if (subgroup_missing) missing.push_back(subgroup_operations_text(subgroup_missing) + " in compute shaders");
   for (VkFormat format : wanted.storage_image_3d_formats) {
     VkImageFormatProperties props{};
     if (vkGetPhysicalDeviceImageFormatProperties(device, format, VK_IMAGE_TYPE_3D, VK_IMAGE_TILING_OPTIMAL,
@@ -135,7 +144,7 @@ std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) 
 }  // namespace
 
 void DeviceRequirements::add(const DeviceRequirements& other) {
-  subgroup_arithmetic |= other.subgroup_arithmetic;
+  subgroup_operations |= other.subgroup_operations;
   graphics_queue |= other.graphics_queue;
   robust_buffer_access |= other.robust_buffer_access;
   for (VkFormat f : other.storage_image_3d_formats)

@@ -31,6 +31,9 @@ struct DeviceInfo {
   std::uint32_t max_image_dimension_3d = 0;
   std::uint64_t device_local_heap_bytes = 0;
   bool pipeline_statistics = false;  // pipelineStatisticsQuery (enabled when present)
+  VkSubgroupFeatureFlags subgroup_operations = 0;  // in compute shaders (0: none there)
+  std::uint32_t subgroup_size = 0;
+  bool has_subgroup_operations(VkSubgroupFeatureFlags wanted) const { return (subgroup_operations & wanted) == wanted; }
   bool is_software() const { return type == "cpu"; }
 };
 
@@ -39,7 +42,7 @@ std::vector<DeviceInfo> list_devices();
 
 // What a method needs of a device beyond core Vulkan 1.1 compute (Method::device).
 struct DeviceRequirements {
-  bool subgroup_arithmetic = false;                   // subgroupAdd/Max... in compute shaders
+  VkSubgroupFeatureFlags subgroup_operations = 0;     // VK_SUBGROUP_FEATURE_*_BIT it uses in compute shaders
   std::vector<VkFormat> storage_image_3d_formats;     // formats it stores into 3D storage images
   bool graphics_queue = false;                        // it draws (graphics pipeline on the same queue)
   std::vector<VkFormat> blend_attachment_formats;     // formats it draws into with blending

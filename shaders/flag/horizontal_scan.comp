@@ -6,11 +6,13 @@
 // One workgroup of 8 invocations (lavapipe's SIMD width) is 8 layers of one row segment of SEGMENT
 // columns of one lattice phase, one invocation one layer: each sample adds itself at its interval's
 // start (clamped to the segment) and subtracts itself past its end in the invocation's difference
-// array, and a prefix sum along the segment gives the layer. Every sample's address is the same for
-// the 8 lanes, but Mesa 22.3's lavapipe still loads it lane by lane: its one-load path takes only
-// addresses built from constants and push constants, not from the workgroup id or a loop counter (a
-// shapes' variant loading whole vectors at the shared address to pick from was slower, results/README.md
-// "Scan bins for shapes"). A sample that reaches none of the workgroup's layers in the segment is skipped. Work per pixel: at most (SEGMENT + 2 n) / SEGMENT samples per layer, O(N).
+// array, and a prefix sum along the segment gives the layer. Every lane needs every sample, but Mesa
+// 22.3's lavapipe loads a shared address lane by lane (its one-load path takes only addresses built
+// from constants and push constants), so the lanes load consecutive samples, one each, test them and
+// hand the ones that reach a layer of the workgroup in the segment to all lanes in turn (ballot and
+// shuffle, registers on lavapipe): one load and one disc index a sample, not 8 (0.86x the FLAG frame,
+// results/README.md "Samples handed on by subgroup shuffle"). Work per pixel: at most
+// (SEGMENT + 2 n) / SEGMENT samples per layer, O(N).
 // The order of additions differs from the bins': flag_horizontal_scan() in kernels/flag/flag.cpp
 // mirrors this one bit for bit.
 // BRACKETED=1: stores (v - offset) / scale of the row's bracket, as horizontal.comp.
@@ -20,6 +22,8 @@
 // that ended before it (a few ulps of their sum), which the worst case's vertical pass adds and the
 // adaptive one, reading only the layers that can be nonzero, does not.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_shuffle : require
 #include "common.glsl"
 
 #if BRACKETED
@@ -56,24 +60,37 @@ void main() {
   const int j_lo = max(-reach_n, -c0), j_hi = min(SEGMENT - 1 + reach_n, (params.width_px - 1 - x0) / k);
   vec3 diff[SEGMENT];
   for (int t = 0; t < SEGMENT; ++t) diff[t] = vec3(0.0);
-  for (int j = j_lo; j <= j_hi; ++j) {
-    // Skip the samples that reach none of the workgroup's layers within the segment, in a loop of
-    // uniform exit (lavapipe runs both sides of every branch, but leaves a loop once no lane is in it).
-    int index = -1;
-    for (; j <= j_hi; ++j) {
-      const int gap = j < 0 ? -j : max(j - (SEGMENT - 1), 0);
-      const float radius = packed_input[index_of(ivec2(x0 + j * k, y))].a;
-      index = disc_index(radius * radius, k, 2 * n * n);
-      if (index >= gap * gap + z_first * z_first) break;
+  // A batch of consecutive samples, one a lane (the workgroup's lanes, or a subgroup's where a
+  // subgroup is narrower than 8: lavapipe without AVX2 has 4).
+  const uvec4 lanes = subgroupBallot(true);
+  const int batch = int(subgroupBallotBitCount(lanes)), rank = int(subgroupBallotExclusiveBitCount(lanes));
+  for (int jb = j_lo; jb <= j_hi; jb += batch) {
+    const int jl = jb + rank;
+    int index_l = -1;
+    vec3 src_l = vec3(0.0);
+    if (jl <= j_hi) {
+      const vec4 s = packed_input[index_of(ivec2(x0 + jl * k, y))];
+      const int gap = jl < 0 ? -jl : max(jl - (SEGMENT - 1), 0);
+      const int index = disc_index(s.a * s.a, k, 2 * n * n);
+      if (index >= gap * gap + z_first * z_first) {  // else it reaches none of the layers in the segment
+        index_l = index;
+        src_l = s.rgb;
+      }
     }
-    if (j > j_hi) break;
-    const vec3 src = packed_input[index_of(ivec2(x0 + j * k, y))].rgb;
-    const int d = z > top_layer ? -1 : index - z * z;
-    const int w = d < 0 ? -SEGMENT - 2 * n - 2 : min(isqrt(max(d, 0)), n);  // d < 0: no interval
-    const bool starts = j + w >= 0 && j - w < SEGMENT, ends = starts && j + w + 1 < SEGMENT;
-    // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
-    diff[clamp(j - w, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
-    diff[clamp(j + w + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+    uvec4 reaching = subgroupBallot(index_l >= 0);
+    // A loop of uniform exit over the reaching lanes, in the order of their samples.
+    while (reaching != uvec4(0)) {
+      const uint from = subgroupBallotFindLSB(reaching);
+      reaching[from / 32] &= ~(1u << (from % 32));
+      const int j = subgroupShuffle(jl, from), index = subgroupShuffle(index_l, from);
+      const vec3 src = subgroupShuffle(src_l, from);
+      const int d = z > top_layer ? -1 : index - z * z;
+      const int w = d < 0 ? -SEGMENT - 2 * n - 2 : min(isqrt(max(d, 0)), n);  // d < 0: no interval
+      const bool starts = j + w >= 0 && j - w < SEGMENT, ends = starts && j + w + 1 < SEGMENT;
+      // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
+      diff[clamp(j - w, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
+      diff[clamp(j + w + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+    }
   }
   vec3 running = vec3(0.0);
   const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);  // within the frame

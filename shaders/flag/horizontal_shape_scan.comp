@@ -8,16 +8,19 @@
 // One workgroup of 8 invocations is 8 layers of one row segment of SEGMENT columns of one lattice phase
 // (scan_segment.glsl), one invocation one layer: each sample adds itself at its interval's start
 // (clamped to the segment) and subtracts itself past its end in the invocation's difference array, and
-// a prefix sum along the segment gives the layer. A sample whose group's union of sections reaches no
-// column of the segment is skipped in a uniform-exit loop. Each invocation loads its own layer's
-// section as one int, not the group's two ivec4 picked from by selects on the lane: lavapipe's one-load
-// path takes only addresses built from constants and push constants (nir_src_is_always_uniform in
-// lp_bld_nir_soa.c), which these (the workgroup id, a loaded area) are not, so an ivec4 at the address
-// the 8 lanes share costs a scalar load per lane and component. Measured on lavapipe 22.3.6 (`bokehbench ab`, 800x600 hoops, blades6, k = 2, f16, 8 paired
-// rounds, beside another helper's builds), the FLAG frame took 0.925 [0.902, 0.945] (N = 41) and 0.958
+// a prefix sum along the segment gives the layer. The lanes load consecutive samples, one each, and
+// hand on those whose group's union of sections reaches a column of the segment (as the disc's). Each
+// invocation loads its own layer's section as one int, not the group's two ivec4 picked from by selects
+// on the lane: lavapipe's one-load path takes only addresses built from constants and push constants
+// (nir_src_is_always_uniform in lp_bld_nir_soa.c), which these (the workgroup id, a loaded area) are
+// not, so an ivec4 at the address the 8 lanes share costs a scalar load per lane and component.
+// Measured on lavapipe 22.3.6 (`bokehbench ab`, 800x600 hoops, blades6, k = 2, f16, 8 paired rounds,
+// beside another helper's builds), the FLAG frame took 0.925 [0.902, 0.945] (N = 41) and 0.958
 // [0.936, 0.982] (N = 153) of the ivec4 form's time.
 // Order of additions: flag_shape_horizontal_scan() in kernels/flag/flag_shape.cpp, bit for bit.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_shuffle : require
 #include "common.glsl"
 #include "layers.glsl"  // LAYERS (the shape's layer count), SPACING; packed_input: colour / area, area
 #include "scan_segment.glsl"
@@ -41,23 +44,34 @@ void main() {
   const int j_lo = max(-n, -c0), j_hi = min(SEGMENT - 1 + n, (params.width_px - 1 - x0) / k);
   vec3 diff[SEGMENT];
   for (int t = 0; t < SEGMENT; ++t) diff[t] = vec3(0.0);
-  for (int j = j_lo; j <= j_hi; ++j) {
-    // Skip the samples whose group's union reaches no column of the segment, in a loop of uniform
-    // exit (as horizontal_scan.comp's): `at` is the sample's (m, g) entry.
-    int at = 0;
-    for (; j <= j_hi; ++j) {
-      at = (int(packed_input[index_of(ivec2(x0 + j * k, y))].a) * groups + g) * 12;
-      const int reach = sections[at + 8];
-      if (reach != 0 && j + last_of(reach, n) >= 0 && j + first_of(reach, n) < SEGMENT) break;
+  // As horizontal_scan.comp: the lanes load consecutive samples, one each, and hand each sample whose
+  // group's union reaches a column of the segment to all of them in turn.
+  const uvec4 lanes = subgroupBallot(true);
+  const int batch = int(subgroupBallotBitCount(lanes)), rank = int(subgroupBallotExclusiveBitCount(lanes));
+  for (int jb = j_lo; jb <= j_hi; jb += batch) {
+    const int jl = jb + rank;
+    int at_l = -1;  // the sample's (m, g) entry; -1: it reaches no column of the segment
+    vec3 src_l = vec3(0.0);
+    if (jl <= j_hi) {
+      const vec4 s = packed_input[index_of(ivec2(x0 + jl * k, y))];
+      const int at = (int(s.a) * groups + g) * 12, reach = sections[at + 8];
+      if (reach != 0 && jl + last_of(reach, n) >= 0 && jl + first_of(reach, n) < SEGMENT) {
+        at_l = at;
+        src_l = s.rgb;
+      }
     }
-    if (j > j_hi) break;
-    const vec3 src = packed_input[index_of(ivec2(x0 + j * k, y))].rgb;
-    const int entry = sections[at + lane];
-    const int first = j + first_of(entry, n), last = j + last_of(entry, n);
-    const bool starts = entry != 0 && last >= 0 && first < SEGMENT, ends = starts && last + 1 < SEGMENT;
-    // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
-    diff[clamp(first, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
-    diff[clamp(last + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+    uvec4 reaching = subgroupBallot(at_l >= 0);
+    while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
+      const uint from = subgroupBallotFindLSB(reaching);
+      reaching[from / 32] &= ~(1u << (from % 32));
+      const int j = subgroupShuffle(jl, from), entry = sections[subgroupShuffle(at_l, from) + lane];
+      const vec3 src = subgroupShuffle(src_l, from);
+      const int first = j + first_of(entry, n), last = j + last_of(entry, n);
+      const bool starts = entry != 0 && last >= 0 && first < SEGMENT, ends = starts && last + 1 < SEGMENT;
+      // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
+      diff[clamp(first, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
+      diff[clamp(last + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+    }
   }
   vec3 running = vec3(0.0);
   const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);  // within the frame

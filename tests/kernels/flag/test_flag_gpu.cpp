@@ -221,10 +221,14 @@ TEST_P(GpuMatchesCpu, FlagF16WithinHalfRoundoff) {
 // Extremes a user will hit: they must give finite, bounded results or a failure the harness
 // measures, never a crash or a silent NaN.
 
-// A device of this type ("cpu": lavapipe's) for the choices a driver makes by device.
+// A device of this type ("cpu": lavapipe's) for the choices a driver makes by device, with the subgroup
+// operations lavapipe and desktop drivers have.
 vk::DeviceInfo device_of_type(const char* type) {
   vk::DeviceInfo info;
   info.type = type;
+  info.subgroup_operations = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_VOTE_BIT |
+                             VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT |
+                             VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
   return info;
 }
 
@@ -266,14 +270,15 @@ TEST(FlagScan, WorksAtTheLargestPattern) {
   EXPECT_TRUE(scan_equals_cpu_mirror(make_scene("points", 48, 40), GatherPattern{201, 1}, 1.0));
 }
 
-// horizontal_bins = auto: on CPU devices masked bins up to 21 layers, scan beyond; indexed on GPUs.
-// An explicit choice is taken as it is.
+// horizontal_bins = auto: on CPU devices masked bins up to 13 layers, scan beyond (indexed where the
+// device lacks the scan's subgroup ballot and shuffle); indexed on GPUs. An explicit choice is taken
+// as it is, and an explicit scan asks the device for those operations.
 TEST(FlagBins, AutoIsMaskedThenScanOnCpuDevicesAndIndexedOnGpus) {
   const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{41, 2}, "f16");
   auto bins = [&o] { return flag_config(o).horizontal_bins; };
-  EXPECT_EQ(flag_horizontal_binning(bins(), software, 21), FlagHorizontalBins::masked);
-  EXPECT_EQ(flag_horizontal_binning(bins(), software, 22), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 13), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 14), FlagHorizontalBins::scan);
   EXPECT_EQ(flag_horizontal_binning(bins(), software, 101), FlagHorizontalBins::scan);
   EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 21), FlagHorizontalBins::indexed);
   EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 81), FlagHorizontalBins::indexed);
@@ -283,6 +288,14 @@ TEST(FlagBins, AutoIsMaskedThenScanOnCpuDevicesAndIndexedOnGpus) {
   EXPECT_EQ(flag_horizontal_binning(bins(), software, 81), FlagHorizontalBins::indexed);
   o.values["horizontal_bins"] = 3;  // "scan"
   EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 21), FlagHorizontalBins::scan);
+  EXPECT_EQ(find_method("flag").needs(o).subgroup_operations & kFlagScanSubgroupOperations, kFlagScanSubgroupOperations);
+
+  vk::DeviceInfo no_shuffle = software;
+  no_shuffle.subgroup_operations &= ~VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
+  o.values["horizontal_bins"] = 0;  // "auto"
+  EXPECT_EQ(find_method("flag").needs(o).subgroup_operations, 0u);
+  EXPECT_EQ(flag_horizontal_binning(bins(), no_shuffle, 13), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_horizontal_binning(bins(), no_shuffle, 14), FlagHorizontalBins::indexed);
 }
 
 // The typed configs read every choice as the choice it names: the enums and parsers follow the

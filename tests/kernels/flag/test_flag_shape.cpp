@@ -155,27 +155,28 @@ TEST(FlagShape, DeclaresItsScope) {
   EXPECT_NE(aperture_unsupported(flag, reduced).find("buffer scale 2"), std::string::npos);
 }
 
-// horizontal_bins = auto for a non-disc aperture: on CPU devices scan for a halved (mirror-symmetric)
-// shape from 12 layers on and for both halves beyond 81 layers (where the indexed bins drop below 4
-// pixels an invocation), else indexed, never masked; indexed on GPUs; an explicit choice as it is. The
-// method's CPU reference and memory model follow it.
+// horizontal_bins = auto for a non-disc aperture: on CPU devices scan from 7 layers on, halved shape or
+// both halves, where the device has the scan's subgroup ballot and shuffle, else indexed, never masked;
+// indexed on GPUs; an explicit choice as it is. The method's CPU reference and memory model follow it.
 TEST(FlagShape, AutoBinsAreScanWhereItWasMeasuredFasterOnCpuDevices) {
   vk::DeviceInfo software, gpu;
   software.type = "cpu";
+  software.subgroup_operations = kFlagScanSubgroupOperations;
   gpu.type = "discrete";
   const auto automatic = FlagHorizontalBins::automatic;
-  EXPECT_EQ(flag_shape_binning(automatic, software, 11, true), FlagHorizontalBins::indexed);
-  EXPECT_EQ(flag_shape_binning(automatic, software, 12, true), FlagHorizontalBins::scan);
-  EXPECT_EQ(flag_shape_binning(automatic, software, 77, true), FlagHorizontalBins::scan);
-  EXPECT_EQ(flag_shape_binning(automatic, software, 81, false), FlagHorizontalBins::indexed);
-  EXPECT_EQ(flag_shape_binning(automatic, software, 82, false), FlagHorizontalBins::scan);
-  EXPECT_EQ(flag_shape_binning(automatic, gpu, 77, true), FlagHorizontalBins::indexed);
-  EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::masked, software, 77, true), FlagHorizontalBins::masked);
-  EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::scan, gpu, 5, false), FlagHorizontalBins::scan);
-  // Without a device the model takes lavapipe's choice: N = 23 halves the hexagon into 12 layers.
+  EXPECT_EQ(flag_shape_binning(automatic, software, 6), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_shape_binning(automatic, software, 7), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_shape_binning(automatic, software, 153), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_shape_binning(automatic, gpu, 77), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::masked, software, 77), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_shape_binning(FlagHorizontalBins::scan, gpu, 5), FlagHorizontalBins::scan);
+  vk::DeviceInfo no_ballot = software;  // the scan's lanes hand samples on with ballot and shuffle
+  no_ballot.subgroup_operations = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
+  EXPECT_EQ(flag_shape_binning(automatic, no_ballot, 77), FlagHorizontalBins::indexed);
+  // Without a device the model takes lavapipe's choice: N = 13 halves the hexagon into 7 layers.
   const Method& flag = find_method("flag");
-  for (const auto& [name, n, table] : {std::tuple{"blades6", 21, "chords"}, std::tuple{"blades6", 23, "row sections"},
-                                       std::tuple{"blades5", 81, "chords"}, std::tuple{"blades5", 101, "row sections"}}) {
+  for (const auto& [name, n, table] : {std::tuple{"blades6", 11, "chords"}, std::tuple{"blades6", 13, "row sections"},
+                                       std::tuple{"blades5", 5, "chords"}, std::tuple{"blades5", 7, "row sections"}}) {
     FilterOptions o = flag.defaults({n, 2});
     o.aperture = parse_aperture(name);
     EXPECT_EQ(flag.gpu_memory(o, 64, 48, nullptr).details["horizontal_table"], table) << name << " N " << n;
@@ -322,9 +323,10 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
   EXPECT_EQ(flag.gpu_memory(hexagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 21);
   EXPECT_EQ(flag.gpu_memory(pentagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 41);
   EXPECT_EQ(flag.gpu_memory(flag.defaults({41, 1}), 1920, 1080, nullptr).details["texel_bytes"], texels * 21);
-  FilterOptions scan = pentagon;
+  FilterOptions scan = pentagon, indexed = pentagon;
   scan.values["horizontal_bins"] = 3;
-  const MemoryUse indexed_model = flag.gpu_memory(pentagon, 1920, 1080, nullptr);
+  indexed.values["horizontal_bins"] = 1;
+  const MemoryUse indexed_model = flag.gpu_memory(indexed, 1920, 1080, nullptr);
   const MemoryUse scan_model = flag.gpu_memory(scan, 1920, 1080, nullptr);
   EXPECT_EQ(scan_model.details["horizontal_table"], "row sections");
   // 41 layers: 6 groups of 48 bytes per area, against 41 columns of 4 bytes.
@@ -332,7 +334,7 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
 
   const Scene s = make_scene("hoops", 61, 45);
   for (const char* name : {"blades5", "blades6"})
-    for (double bins : {0.0, 3.0}) {  // auto (indexed here), scan
+    for (double bins : {1.0, 3.0}) {  // indexed, scan
       FilterOptions o = flag.defaults({9, 2});
       o.aperture = parse_aperture(name);
       o.values["horizontal_bins"] = bins;
