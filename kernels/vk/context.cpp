@@ -73,7 +73,6 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   info.max_texel_buffer_elements = p.limits.maxTexelBufferElements;
   info.max_image_dimension_3d = p.limits.maxImageDimension3D;
   if (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) info.subgroup_operations = subgroup.supportedOperations;
-  info.subgroup_size = subgroup.subgroupSize;
 
   std::uint32_t family_count = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(device, &family_count, nullptr);
@@ -92,16 +91,25 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   return info;
 }
 
-// "subgroup ballot, shuffle": the named operation classes among `flags`.
+// "subgroup ballot, shuffle": the operation classes among `flags` (by number where Vulkan 1.1 has no name).
 std::string subgroup_operations_text(VkSubgroupFeatureFlags flags) {
   static const std::pair<VkSubgroupFeatureFlagBits, const char*> names[] = {
-      {VK_SUBGROUP_FEATURE_BASIC_BIT, "basic"},       {VK_SUBGROUP_FEATURE_VOTE_BIT, "vote"},
-      {VK_SUBGROUP_FEATURE_ARITHMETIC_BIT, "arithmetic"}, {VK_SUBGROUP_FEATURE_BALLOT_BIT, "ballot"},
-      {VK_SUBGROUP_FEATURE_SHUFFLE_BIT, "shuffle"},   {VK_SUBGROUP_FEATURE_SHUFFLE_RELATIVE_BIT, "relative shuffle"},
-      {VK_SUBGROUP_FEATURE_CLUSTERED_BIT, "clustered"}, {VK_SUBGROUP_FEATURE_QUAD_BIT, "quad"}};
+      {VK_SUBGROUP_FEATURE_BASIC_BIT, "basic"},
+      {VK_SUBGROUP_FEATURE_VOTE_BIT, "vote"},
+      {VK_SUBGROUP_FEATURE_ARITHMETIC_BIT, "arithmetic"},
+      {VK_SUBGROUP_FEATURE_BALLOT_BIT, "ballot"},
+      {VK_SUBGROUP_FEATURE_SHUFFLE_BIT, "shuffle"},
+      {VK_SUBGROUP_FEATURE_SHUFFLE_RELATIVE_BIT, "relative shuffle"},
+      {VK_SUBGROUP_FEATURE_CLUSTERED_BIT, "clustered"},
+      {VK_SUBGROUP_FEATURE_QUAD_BIT, "quad"}};
   std::string text;
+  auto add = [&text](const std::string& name) { text += (text.empty() ? "subgroup " : ", ") + name; };
   for (const auto& [bit, name] : names)
-    if (flags & bit) text += (text.empty() ? "subgroup " : ", ") + std::string(name);
+    if (flags & bit) {
+      add(name);
+      flags &= ~static_cast<VkSubgroupFeatureFlags>(bit);
+    }
+  if (flags) add(fmt::format("operations 0x{:x}", flags));
   return text;
 }
 

@@ -32,7 +32,6 @@ struct DeviceInfo {
   std::uint64_t device_local_heap_bytes = 0;
   bool pipeline_statistics = false;  // pipelineStatisticsQuery (enabled when present)
   VkSubgroupFeatureFlags subgroup_operations = 0;  // in compute shaders (0: none there)
-  std::uint32_t subgroup_size = 0;
   bool has_subgroup_operations(VkSubgroupFeatureFlags wanted) const { return (subgroup_operations & wanted) == wanted; }
   bool is_software() const { return type == "cpu"; }
 };
