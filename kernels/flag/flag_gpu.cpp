@@ -111,29 +111,23 @@ const std::vector<std::string>& flag_horizontal_bins() {
 // indexed): N = 21 masked 0.63, scan 0.78; N = 41 masked 0.77, scan 0.71; N = 81 masked 8.9, scan
 // 0.84; N = 121 scan 0.71. Lavapipe turns each event into a per-lane scalar read and write of the
 // difference array, as it does each indexed bin, and a pixel takes about as many events (2 per layer)
-// as samples (N). Since the scan's lanes hand samples on by shuffle (one load a sample, not 8), masked
-// only up to 13 layers where rows are wide: a segment of C columns steps C + 2 n samples, so the
-// scan's share of halo grows as the row narrows (reduced buffers, small frames), while masked's cost
-// does not depend on the width but grows as layers^2. `bokehbench ab`, auto built as scan against auto
-// built as masked, alone on a 2-core AMD EPYC at 2.6 GHz, FLAG frame in process CPU time, scan /
-// masked [95%] (results/scan_shuffle/ab_auto_disc_*.json, ab_masked_*.json):
-// - 800x600 (C = 400): N = 21 1.076 [1.054, 1.098]; 23 1.000; 25 1.002; 27 0.955 [0.920, 0.966];
-//   29 0.877 [0.845, 0.890]; 31 0.880; 41 0.946 [0.938, 0.971];
-// - 400x300 (C = 200): N = 29 0.992 [0.964, 1.020]; 41 0.980 [0.929, 1.003]; 57 0.820 [0.786, 0.843];
-// - 200x150 (C = 100): N = 29 1.145 [1.095, 1.198]; 41 1.105 [0.998, 1.156]; 57 0.980 [0.957, 1.011].
-// So scan from 14 layers where the halo 2 n is at most a fifth of the segment, from 29 layers at any width.
-constexpr int kSoftwareMaskedFirstLayers = 13, kSoftwareScanAnyWidthLayers = 29;
+// as samples (N). Since the scan's lanes hand samples on by shuffle (one load a sample, not 8) and
+// clear only the segment's columns within the frame, masked only up to 12 layers, at any width.
+// `bokehbench ab`, auto built as scan against auto built as masked, alone on a 2-core AMD EPYC at
+// 2.6 GHz, FLAG frame in process CPU time, scan / masked [95%] (results/scan_shuffle/ab_auto_cleared_*.json):
+// - 800x600: N = 17 1.194 [1.171, 1.208]; 21 1.084 [1.078, 1.102]; 25 0.955 [0.948, 0.959];
+// - 400x300: N = 29 0.880 [0.869, 0.903]; 41 0.868 [0.858, 0.889]; 57 0.712 [0.705, 0.723];
+// - 200x150: N = 17 1.216 [1.139, 1.232]; 21 1.075 [1.055, 1.157]; 25 0.944 [0.923, 0.994]; 29 0.840
+//   [0.819, 0.859]; 41 0.812 [0.784, 0.857]; 57 0.686 [0.667, 0.695].
+// (Clearing the whole segment had made the scan up to 1.15x masked's time in 200 px rows at N = 29-41.)
+constexpr int kSoftwareMaskedFirstLayers = 12;
 
-FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device,
-                                           const GatherPattern& pattern, int width_px) {
+FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers) {
   if (bins != FlagHorizontalBins::automatic) return bins;
   // A GPU's L1 cache serves the indexed bins (a register file or cache line per pixel) at one add
   // per sample; the scan's re-reads of each sample per group of 8 layers would only add loads there.
   if (!device.is_software()) return FlagHorizontalBins::indexed;
-  const int layers = pattern.layers();
-  const int segment_columns = std::min(kFlagScanSegment, ceil_div(width_px, pattern.spacing_px));
-  const bool narrow = 2 * pattern.half() * 5 > segment_columns && layers < kSoftwareScanAnyWidthLayers;
-  if (layers <= kSoftwareMaskedFirstLayers || narrow) return FlagHorizontalBins::masked;
+  if (layers <= kSoftwareMaskedFirstLayers) return FlagHorizontalBins::masked;
   return device.has_subgroup_operations(kFlagScanSubgroupOperations) ? FlagHorizontalBins::scan
                                                                      : FlagHorizontalBins::indexed;
 }
@@ -222,8 +216,7 @@ class Flag final : public gpu::GpuFilter {
         low_width_(ceil_div(frame.width(), scale_)),
         low_height_(ceil_div(frame.height(), scale_)),
         outputs_(flag_horizontal_block(config.horizontal_block, frame.ctx.info(), pattern_.layers())),
-        bins_(flag_horizontal_binning(config.horizontal_bins, frame.ctx.info(), pattern_,
-                                      static_cast<int>(low_width_))),
+        bins_(flag_horizontal_binning(config.horizontal_bins, frame.ctx.info(), pattern_.layers())),
         tile_px_(config.adaptive ? config.adaptive_tile_px : 0),
         streamed_(config.streamed),
         layer_count_(pattern_.layers()) {

@@ -34,9 +34,8 @@ int flag_horizontal_block(std::optional<int> requested, const vk::DeviceInfo& de
 // per 8 layers by one lane and handed to the others; the same samples per layer in another order of
 // additions (flag_horizontal_scan() mirrors it bit for bit; bracketed precisions quantise its values
 // with the bracket pass's ranges, which sum in the bins' order: within one code). "auto": on CPU
-// devices (lavapipe) masked up to 13 layers (N = 25, k = 2) and up to 28 where rows are narrow
-// (a scan segment's halo 2 n over a fifth of its columns), scan beyond (indexed without the scan's
-// subgroup operations); on GPUs indexed. flag_gpu.cpp has the measurements. Non-disc apertures
+// devices (lavapipe) masked up to 12 layers (N = 23), scan beyond (indexed without the scan's subgroup
+// operations); on GPUs indexed. flag_gpu.cpp has the measurements. Non-disc apertures
 // choose their own (flag_shape_binning, flag_shape_gpu.hpp).
 const std::vector<std::string>& flag_horizontal_bins();  // "auto", "indexed", "masked", "scan"
 // The option's value; the enumerators in the order of flag_horizontal_bins().
@@ -45,10 +44,8 @@ enum class FlagHorizontalBins { automatic, indexed, masked, scan };
 // a device without these runs the other binnings (auto) or refuses scan.
 constexpr VkSubgroupFeatureFlags kFlagScanSubgroupOperations =
     VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
-// The binning the pass runs: `bins` as chosen, auto's choice by device, pattern and the width of the
-// image the pass filters (the reduced buffer's where buffer_scale > 1).
-FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device,
-                                           const GatherPattern& pattern, int width_px);
+// The binning the pass runs: `bins` as chosen, auto's choice by device and layers.
+FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::DeviceInfo& device, int layers);
 // Invocations along a row of the horizontal pass (the disc's and other apertures'), `bins` resolved:
 // scan, k phases x ceil(ceil(W / k) / kFlagScanSegment) segments x ceil(layers / 8) workgroups of 8
 // (shaders/flag/scan_segment.glsl); else ceil(W / (block k)) k, a block of pixels at stride k each.

@@ -244,8 +244,7 @@ std::vector<OptionSpec> flag_options() {
            "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
            "each sample loaded once per 8 layers and handed on by subgroup shuffle; the same samples in another "
            "order of additions; needs subgroup ballot and shuffle); auto: on CPU devices such as lavapipe masked "
-           "up to 13 layers (N = 25 at k = 2), and up to 28 where a row is narrow (a scan segment's halo 2 n over "
-           "a fifth of its columns), scan beyond (other apertures: scan from 7 layers, else indexed); indexed "
+           "up to 12 layers (N = 23), scan beyond (other apertures: scan from 7 layers, else indexed); indexed "
            "on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
            0, 0, 0, false, flag_horizontal_bins()},
           {"vertical_order",

@@ -58,8 +58,11 @@ void main() {
 #endif
   // Samples j (column x0 + j k) within reach_n of the segment and inside the frame.
   const int j_lo = max(-reach_n, -c0), j_hi = min(SEGMENT - 1 + reach_n, (params.width_px - 1 - x0) / k);
+  // The segment's columns within the frame: events past them change no output, so they are dropped
+  // and only these slots are cleared.
+  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);
   vec3 diff[SEGMENT];
-  for (int t = 0; t < SEGMENT; ++t) diff[t] = vec3(0.0);
+  for (int t = 0; t < columns; ++t) diff[t] = vec3(0.0);
   // A batch of consecutive samples, one a lane (the workgroup's lanes, or a subgroup's where a
   // subgroup is narrower than 8: lavapipe without AVX2 has 4).
   const uvec4 lanes = subgroupBallot(true);
@@ -86,14 +89,13 @@ void main() {
       const vec3 src = subgroupShuffle(src_l, from);
       const int d = z > top_layer ? -1 : index - z * z;
       const int w = d < 0 ? -SEGMENT - 2 * n - 2 : min(isqrt(max(d, 0)), n);  // d < 0: no interval
-      const bool starts = j + w >= 0 && j - w < SEGMENT, ends = starts && j + w + 1 < SEGMENT;
+      const bool starts = j + w >= 0 && j - w < columns, ends = starts && j + w + 1 < columns;
       // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
-      diff[clamp(j - w, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
-      diff[clamp(j + w + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+      diff[clamp(j - w, 0, columns - 1)] += starts ? src : vec3(0.0);
+      diff[clamp(j + w + 1, 0, columns - 1)] -= ends ? src : vec3(0.0);
     }
   }
   vec3 running = vec3(0.0);
-  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);  // within the frame
   for (int t = 0; t < columns; ++t) {
     running += diff[t];
     const ivec2 p = ivec2(x0 + t * k, y);

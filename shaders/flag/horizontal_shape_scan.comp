@@ -42,8 +42,11 @@ void main() {
   if (x0 >= params.width_px) return;  // uniform: a phase with fewer columns than the dispatch covers
   // Samples j (column x0 + j k) within n of the segment and inside the frame.
   const int j_lo = max(-n, -c0), j_hi = min(SEGMENT - 1 + n, (params.width_px - 1 - x0) / k);
+  // The segment's columns within the frame: events past them change no output, so they are dropped
+  // and only these slots are cleared.
+  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);
   vec3 diff[SEGMENT];
-  for (int t = 0; t < SEGMENT; ++t) diff[t] = vec3(0.0);
+  for (int t = 0; t < columns; ++t) diff[t] = vec3(0.0);
   // As horizontal_scan.comp: the lanes load consecutive samples, one each, and hand each sample whose
   // group's union reaches a column of the segment to all of them in turn.
   const uvec4 lanes = subgroupBallot(true);
@@ -67,14 +70,13 @@ void main() {
       const int j = subgroupShuffle(jl, from), entry = sections[subgroupShuffle(at_l, from) + lane];
       const vec3 src = subgroupShuffle(src_l, from);
       const int first = j + first_of(entry, n), last = j + last_of(entry, n);
-      const bool starts = entry != 0 && last >= 0 && first < SEGMENT, ends = starts && last + 1 < SEGMENT;
+      const bool starts = entry != 0 && last >= 0 && first < columns, ends = starts && last + 1 < columns;
       // Without an event, +0.0 at a clamped slot: the same bits as no add (no slot holds -0.0).
-      diff[clamp(first, 0, SEGMENT - 1)] += starts ? src : vec3(0.0);
-      diff[clamp(last + 1, 0, SEGMENT - 1)] -= ends ? src : vec3(0.0);
+      diff[clamp(first, 0, columns - 1)] += starts ? src : vec3(0.0);
+      diff[clamp(last + 1, 0, columns - 1)] -= ends ? src : vec3(0.0);
     }
   }
   vec3 running = vec3(0.0);
-  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);  // within the frame
   for (int t = 0; t < columns; ++t) {
     running += diff[t];
     if (z < LAYERS) imageStore(layers, ivec3(x0 + t * k, layer_row(y), z), vec4(running, 0.0));

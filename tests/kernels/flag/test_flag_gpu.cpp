@@ -112,7 +112,7 @@ TEST_P(GpuMatchesCpu, EveryBlockEqualsTheOrderedCpuReferenceBitForBit) {
       gpu::run_frames(frame, *filter, timer);
       const Image packed = frame.read_packed();
       const bool scan = std::string(v.method) == "flag" &&
-                        flag_horizontal_binning(flag_config(o).horizontal_bins, context().info(), pattern, s.color.width) ==
+                        flag_horizontal_binning(flag_config(o).horizontal_bins, context().info(), pattern.layers()) ==
                             FlagHorizontalBins::scan;
       const Image reference =
           std::string(v.method) == "naive" ? naive_gather_reference(packed, pattern, 2)
@@ -270,45 +270,33 @@ TEST(FlagScan, WorksAtTheLargestPattern) {
   EXPECT_TRUE(scan_equals_cpu_mirror(make_scene("points", 48, 40), GatherPattern{201, 1}, 1.0));
 }
 
-// horizontal_bins = auto: on CPU devices masked bins up to 13 layers, and up to 28 where a scan segment's
-// halo (2 n samples) is over a fifth of its columns, scan beyond (indexed where the device lacks the
-// scan's subgroup ballot and shuffle); indexed on GPUs. An explicit choice is taken as it is, and an
-// explicit scan asks the device for those operations.
+// horizontal_bins = auto: on CPU devices masked bins up to 12 layers, scan beyond (indexed where the
+// device lacks the scan's subgroup ballot and shuffle); indexed on GPUs. An explicit choice is taken
+// as it is, and an explicit scan asks the device for those operations.
 TEST(FlagBins, AutoIsMaskedThenScanOnCpuDevicesAndIndexedOnGpus) {
   const vk::DeviceInfo software = device_of_type("cpu"), gpu = device_of_type("discrete");
   FilterOptions o = options_for("flag", GatherPattern{41, 2}, "f16");
   auto bins = [&o] { return flag_config(o).horizontal_bins; };
-  auto binning = [&](const vk::DeviceInfo& device, int size_n, int width_px) {
-    return flag_horizontal_binning(bins(), device, GatherPattern{size_n, 2}, width_px);
-  };
-  EXPECT_EQ(binning(software, 25, 800), FlagHorizontalBins::masked);  // 13 layers
-  EXPECT_EQ(binning(software, 27, 800), FlagHorizontalBins::scan);
-  EXPECT_EQ(binning(software, 201, 800), FlagHorizontalBins::scan);
-  // 400 px at k = 2: a segment of 200 columns, of which the halo 2 n = 40 at N = 41 is a fifth.
-  EXPECT_EQ(binning(software, 41, 400), FlagHorizontalBins::scan);
-  EXPECT_EQ(binning(software, 41, 398), FlagHorizontalBins::masked);
-  EXPECT_EQ(binning(software, 29, 200), FlagHorizontalBins::masked);
-  EXPECT_EQ(binning(software, 55, 200), FlagHorizontalBins::masked);  // 28 layers
-  EXPECT_EQ(binning(software, 57, 200), FlagHorizontalBins::scan);    // 29 layers: at any width
-  EXPECT_EQ(binning(software, 57, 2), FlagHorizontalBins::scan);
-  EXPECT_EQ(binning(software, 81, 8000), FlagHorizontalBins::scan);   // segments of 512 columns
-  EXPECT_EQ(binning(gpu, 41, 800), FlagHorizontalBins::indexed);
-  EXPECT_EQ(binning(gpu, 161, 800), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 12), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 13), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 101), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 21), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 81), FlagHorizontalBins::indexed);
   o.values["horizontal_bins"] = 2;  // "masked"
-  EXPECT_EQ(binning(gpu, 161, 800), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 81), FlagHorizontalBins::masked);
   o.values["horizontal_bins"] = 1;  // "indexed"
-  EXPECT_EQ(binning(software, 161, 800), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 81), FlagHorizontalBins::indexed);
   o.values["horizontal_bins"] = 3;  // "scan"
-  EXPECT_EQ(binning(gpu, 41, 800), FlagHorizontalBins::scan);
-  EXPECT_EQ(binning(software, 9, 64), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), gpu, 21), FlagHorizontalBins::scan);
+  EXPECT_EQ(flag_horizontal_binning(bins(), software, 5), FlagHorizontalBins::scan);
   EXPECT_EQ(find_method("flag").needs(o).subgroup_operations & kFlagScanSubgroupOperations, kFlagScanSubgroupOperations);
 
   vk::DeviceInfo no_shuffle = software;
   no_shuffle.subgroup_operations &= ~VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
   o.values["horizontal_bins"] = 0;  // "auto"
   EXPECT_EQ(find_method("flag").needs(o).subgroup_operations, 0u);
-  EXPECT_EQ(binning(no_shuffle, 25, 800), FlagHorizontalBins::masked);
-  EXPECT_EQ(binning(no_shuffle, 27, 800), FlagHorizontalBins::indexed);
+  EXPECT_EQ(flag_horizontal_binning(bins(), no_shuffle, 12), FlagHorizontalBins::masked);
+  EXPECT_EQ(flag_horizontal_binning(bins(), no_shuffle, 13), FlagHorizontalBins::indexed);
 }
 
 // The device says which subgroup operations it lacks by name: lavapipe (and desktop drivers) has the
