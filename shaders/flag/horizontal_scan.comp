@@ -22,7 +22,6 @@
 // that ended before it (a few ulps of their sum), which the worst case's vertical pass adds and the
 // adaptive one, reading only the layers that can be nonzero, does not.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_shuffle : require
 #include "common.glsl"
 
@@ -45,7 +44,7 @@ void main() {
   const int n = LAYERS - 1, k = SPACING;
   // Layers z_first .. z_first + 7 (those past n store nothing) of row y, columns x0 + t k.
   const ScanSegment segment = scan_segment(LAYERS, k);
-  const int y = segment.y, c0 = segment.c0, x0 = segment.x0;
+  const int y = segment.y, c0 = segment.c0, x0 = segment.x0, columns = segment.columns;
   const int z_first = segment.z_first, z = z_first + int(gl_LocalInvocationID.x);
   if (x0 >= params.width_px) return;  // uniform: a phase with fewer columns than the dispatch covers
 #if ADAPTIVE
@@ -58,17 +57,11 @@ void main() {
 #endif
   // Samples j (column x0 + j k) within reach_n of the segment and inside the frame.
   const int j_lo = max(-reach_n, -c0), j_hi = min(SEGMENT - 1 + reach_n, (params.width_px - 1 - x0) / k);
-  // The segment's columns within the frame: events past them change no output, so they are dropped
-  // and only these slots are cleared.
-  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);
   vec3 diff[SEGMENT];
   for (int t = 0; t < columns; ++t) diff[t] = vec3(0.0);
-  // A batch of consecutive samples, one a lane (the workgroup's lanes, or a subgroup's where a
-  // subgroup is narrower than 8: lavapipe without AVX2 has 4).
-  const uvec4 lanes = subgroupBallot(true);
-  const int batch = int(subgroupBallotBitCount(lanes)), rank = int(subgroupBallotExclusiveBitCount(lanes));
-  for (int jb = j_lo; jb <= j_hi; jb += batch) {
-    const int jl = jb + rank;
+  const ivec2 batch = sample_batch();
+  for (int jb = j_lo; jb <= j_hi; jb += batch.x) {
+    const int jl = jb + batch.y;
     int index_l = -1;
     vec3 src_l = vec3(0.0);
     if (jl <= j_hi) {
@@ -83,8 +76,7 @@ void main() {
     uvec4 reaching = subgroupBallot(index_l >= 0);
     // A loop of uniform exit over the reaching lanes, in the order of their samples.
     while (reaching != uvec4(0)) {
-      const uint from = subgroupBallotFindLSB(reaching);
-      reaching[from / 32] &= ~(1u << (from % 32));
+      const uint from = take_lowest_lane(reaching);
       const int j = subgroupShuffle(jl, from), index = subgroupShuffle(index_l, from);
       const vec3 src = subgroupShuffle(src_l, from);
       const int d = z > top_layer ? -1 : index - z * z;

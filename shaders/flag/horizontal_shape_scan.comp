@@ -19,7 +19,6 @@
 // [0.936, 0.982] (N = 153) of the ivec4 form's time.
 // Order of additions: flag_shape_horizontal_scan() in kernels/flag/flag_shape.cpp, bit for bit.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_shuffle : require
 #include "common.glsl"
 #include "layers.glsl"  // LAYERS (the shape's layer count), SPACING; packed_input: colour / area, area
@@ -42,17 +41,14 @@ void main() {
   if (x0 >= params.width_px) return;  // uniform: a phase with fewer columns than the dispatch covers
   // Samples j (column x0 + j k) within n of the segment and inside the frame.
   const int j_lo = max(-n, -c0), j_hi = min(SEGMENT - 1 + n, (params.width_px - 1 - x0) / k);
-  // The segment's columns within the frame: events past them change no output, so they are dropped
-  // and only these slots are cleared.
-  const int columns = min(SEGMENT, (params.width_px - 1 - x0) / k + 1);
+  const int columns = segment.columns;
   vec3 diff[SEGMENT];
   for (int t = 0; t < columns; ++t) diff[t] = vec3(0.0);
-  // As horizontal_scan.comp: the lanes load consecutive samples, one each, and hand each sample whose
-  // group's union reaches a column of the segment to all of them in turn.
-  const uvec4 lanes = subgroupBallot(true);
-  const int batch = int(subgroupBallotBitCount(lanes)), rank = int(subgroupBallotExclusiveBitCount(lanes));
-  for (int jb = j_lo; jb <= j_hi; jb += batch) {
-    const int jl = jb + rank;
+  // As horizontal_scan.comp: each sample whose group's union reaches a column of the segment is
+  // handed to all lanes in turn.
+  const ivec2 batch = sample_batch();
+  for (int jb = j_lo; jb <= j_hi; jb += batch.x) {
+    const int jl = jb + batch.y;
     int at_l = -1;  // the sample's (m, g) entry; -1: it reaches no column of the segment
     vec3 src_l = vec3(0.0);
     if (jl <= j_hi) {
@@ -65,8 +61,7 @@ void main() {
     }
     uvec4 reaching = subgroupBallot(at_l >= 0);
     while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
-      const uint from = subgroupBallotFindLSB(reaching);
-      reaching[from / 32] &= ~(1u << (from % 32));
+      const uint from = take_lowest_lane(reaching);
       const int j = subgroupShuffle(jl, from), entry = sections[subgroupShuffle(at_l, from) + lane];
       const vec3 src = subgroupShuffle(src_l, from);
       const int first = j + first_of(entry, n), last = j + last_of(entry, n);
