@@ -326,19 +326,27 @@ nlohmann::json widen_by_processes(Figures& whole_run, const std::vector<RoundPoi
 Figures figures(const std::vector<RoundPoint>& points, Metric metric, double target_ratio, double target_exponent,
                 bool headlines_only, const std::vector<int>& round_process) {
   Figures out;
+  // The curve of the points `in` selects, in N order, with their backend and time; null when none.
+  const auto curve_of = [&](const auto& in) {
+    std::vector<const RoundPoint*> pts;
+    for (const auto& p : points)
+      if (in(p)) pts.push_back(&p);
+    if (pts.empty()) return nlohmann::json();
+    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
+    nlohmann::json curve = curve_json(pts, metric, headlines_only);
+    curve.update({{"backend", pts.front()->backend}, {"time", time_of(*pts.front(), metric)}});
+    return curve;
+  };
   std::set<std::string> variants;
   for (const auto& p : points) variants.insert(p.variant);
   for (const Method* method : known_methods())
     for (const std::string& variant : variants)
       for (const char* backend : {"gpu", "cpu"}) {
-        const Method& m = *method;
-        std::vector<const RoundPoint*> pts;
-        for (const auto& p : points)
-          if (!p.baseline && p.method == m.name && p.variant == variant && p.backend == backend) pts.push_back(&p);
-        if (pts.empty()) continue;
-        std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
-        nlohmann::json curve = curve_json(pts, metric, headlines_only);
-        curve.update({{"method", m.name}, {"variant", variant}, {"backend", backend}, {"time", time_of(*pts.front(), metric)}});
+        nlohmann::json curve = curve_of([&](const RoundPoint& p) {
+          return !p.baseline && p.method == method->name && p.variant == variant && p.backend == backend;
+        });
+        if (curve.is_null()) continue;
+        curve.update({{"method", method->name}, {"variant", variant}});
         out.series.push_back(std::move(curve));
       }
   // Each CPU baseline's curve, in the time of the GPU points it is set beside.
@@ -346,12 +354,8 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
   for (const auto& p : points)
     if (p.baseline) baselines.insert(p.method);
   for (const std::string& name : baselines) {
-    std::vector<const RoundPoint*> pts;
-    for (const auto& p : points)
-      if (p.baseline && p.method == name) pts.push_back(&p);
-    std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
-    nlohmann::json curve = curve_json(pts, metric, headlines_only);
-    curve.update({{"baseline", name}, {"backend", pts.front()->backend}, {"time", time_of(*pts.front(), metric)}});
+    nlohmann::json curve = curve_of([&](const RoundPoint& p) { return p.baseline && p.method == name; });
+    curve["baseline"] = name;
     out.baseline_series.push_back(std::move(curve));
   }
   // The paper's comparison: both at their defaults; and FLAG on the GPU against each CPU baseline at its N.

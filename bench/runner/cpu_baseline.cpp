@@ -69,6 +69,11 @@ cv::Mat view_of(const Image& color) {
   return cv::Mat(color.height, color.width, CV_32FC3, const_cast<float*>(color.pixels.data()));
 }
 
+// The baseline's one call: correlation with the kernel, border constant 0, weights as they are.
+void filter(const cv::Mat& source, cv::Mat& output, const cv::Mat& kernel) {
+  cv::filter2D(source, output, CV_32F, kernel, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+}
+
 class Filter2dTarget final : public runner::Target {
  public:
   Filter2dTarget(const Image& color, const GatherPattern& pattern, int threads)
@@ -89,7 +94,7 @@ class Filter2dTarget final : public runner::Target {
  private:
   void frame() {
     use_threads(threads_);
-    cv::filter2D(source_, output_, CV_32F, kernel_, cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+    filter(source_, output_, kernel_);
   }
 
   cv::Mat source_, output_, kernel_;
@@ -107,8 +112,7 @@ Image filter2d_disc(const Image& color, const GatherPattern& pattern, int thread
   const int side_px = disc_kernel_side_px(pattern);
   Image out(color.width, color.height, 3);
   cv::Mat dst(out.height, out.width, CV_32FC3, out.pixels.data());
-  cv::filter2D(view_of(color), dst, CV_32F, cv::Mat(side_px, side_px, CV_32F, values.data()), cv::Point(-1, -1), 0,
-               cv::BORDER_CONSTANT);
+  filter(view_of(color), dst, cv::Mat(side_px, side_px, CV_32F, values.data()));
   if (dst.data != reinterpret_cast<uchar*>(out.pixels.data()))
     throw std::logic_error("filter2D baseline: OpenCV reallocated the output");  // it writes into `out` in place
   return out;

@@ -50,9 +50,16 @@ int preference(const DeviceInfo& d) {
   return static_cast<int>(std::find(std::begin(order), std::end(order), d.type) - std::begin(order));
 }
 
-DeviceInfo describe(VkPhysicalDevice device, int index) {
+// The subgroup operations compute shaders have on `device` (0 where compute has none).
+VkSubgroupFeatureFlags compute_subgroup_operations(VkPhysicalDevice device) {
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES, &subgroup};
+  VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &subgroup};
+  vkGetPhysicalDeviceProperties2(device, &props);
+  return (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ? subgroup.supportedOperations : 0;
+}
+
+DeviceInfo describe(VkPhysicalDevice device, int index) {
+  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
   VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   props.pNext = &driver;
   vkGetPhysicalDeviceProperties2(device, &props);
@@ -72,7 +79,7 @@ DeviceInfo describe(VkPhysicalDevice device, int index) {
   info.max_uniform_buffer_range_bytes = p.limits.maxUniformBufferRange;
   info.max_texel_buffer_elements = p.limits.maxTexelBufferElements;
   info.max_image_dimension_3d = p.limits.maxImageDimension3D;
-  if (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) info.subgroup_operations = subgroup.supportedOperations;
+  info.subgroup_operations = compute_subgroup_operations(device);
 
   std::uint32_t family_count = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(device, &family_count, nullptr);
@@ -115,7 +122,7 @@ std::string subgroup_operations_text(VkSubgroupFeatureFlags flags) {
 
 std::string unmet_by(VkPhysicalDevice device, const DeviceRequirements& wanted) {
   std::vector<std::string> missing;
-  const VkSubgroupFeatureFlags subgroup_missing = wanted.subgroup_operations & ~describe(device, -1).subgroup_operations;
+  const VkSubgroupFeatureFlags subgroup_missing = wanted.subgroup_operations & ~compute_subgroup_operations(device);
   if (subgroup_missing) missing.push_back(subgroup_operations_text(subgroup_missing) + " in compute shaders");
   for (VkFormat format : wanted.storage_image_3d_formats) {
     VkImageFormatProperties props{};
