@@ -79,7 +79,8 @@ def intervals(d):
         r = p.get("streamed_vs_full")
         if not r:
             continue
-        full = by_id[p["id"].replace("/layer_buffer:\"streamed\"", "").split("/band_rows:")[0]]
+        base = p["id"].split("/layer_buffer:")[0]
+        full = by_id.get(base + "/layer_buffer:\"full\"") or by_id[base]  # the 3D buffer, named since auto
         full_ms = dict(zip(full["sample_rounds"], full["samples_ms"]))
         same_round = [ms / full_ms[r_] for r_, ms in zip(p["sample_rounds"], p["samples_ms"]) if r_ in full_ms]
         want = median_interval(same_round)

@@ -43,6 +43,11 @@ bool is_streamed(const nlohmann::json& point) {
   return point.contains("options") && point["options"].value("layer_buffer", "") == "streamed";
 }
 
+// The full buffer at every other option's default (written "" before auto became the default).
+bool is_full_buffer(const nlohmann::json& point) {
+  return point["variant"] == "" || point["variant"] == "/layer_buffer:\"full\"";
+}
+
 // The frame of the same resolution, N, k and precision a point is compared with: its streamed and
 // full-resolution buffers are visited back to back in every round (visit_together).
 std::string frame_key(const nlohmann::json& p) {
@@ -166,6 +171,9 @@ void buffers(BuffersOptions& o) {
                        : std::string());
     }
   };
+  // FLAG through its 3D buffer, the subject here (auto runs none on lavapipe at f16 and f32).
+  const OptionSpec* layer_buffer = find_method("flag").option("layer_buffer");
+  if (!axes.option_values.count(layer_buffer->key)) axes.option_values[layer_buffer->key] = layer_buffer->parse("full");
   o.sweep.apply_shard(axes);
   std::vector<SweepPoint> points = expand(axes);
   if (!has_flag) {
@@ -177,9 +185,7 @@ void buffers(BuffersOptions& o) {
   std::set<std::string> shard_keys;
   for (const auto& p : points) shard_keys.insert(shard_key(p.id, p.method->name, p.variant));
   const Method& flag = find_method("flag");
-  const OptionSpec* layer_buffer = flag.option("layer_buffer");
-  const auto streamed = static_cast<double>(std::find(layer_buffer->choices.begin(), layer_buffer->choices.end(),
-                                                      "streamed") - layer_buffer->choices.begin());
+  const double streamed = layer_buffer->parse("streamed");
   for (int rows : o.band_rows) {
     Axes banded = axes;
     banded.methods = {flag.name};
@@ -199,7 +205,7 @@ void derive_buffers(nlohmann::json& doc) {
   for (auto& p : doc["points"]) {
     if (!is_streamed(p)) continue;
     for (const auto& full : doc["points"])
-      if (!is_streamed(full) && full["buffer_scale"] == 1 && full["variant"] == "" && frame_key(full) == frame_key(p))
+      if (!is_streamed(full) && full["buffer_scale"] == 1 && is_full_buffer(full) && frame_key(full) == frame_key(p))
         p["streamed_vs_full"] = streamed_vs_full(p, full);
   }
   for (auto& p : doc["points"]) {

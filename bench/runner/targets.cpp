@@ -136,7 +136,9 @@ SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::str
       check_options(m, p.options);
       std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
       const auto& model = p.backend == "cpu" && m.cpu_work ? m.cpu_work : m.work;
-      for (auto& pass : model(p.options, w, h)) work.push_back(std::move(pass));
+      const vk::DeviceInfo* device = p.backend == "gpu" && context() ? &context()->info() : nullptr;
+      for (auto& pass : model(m.on_device ? m.on_device(p.options, device) : p.options, w, h))
+        work.push_back(std::move(pass));
       plans_[i].work = work_json(work, static_cast<double>(w) * h);
       // Device features and limits, memory budget, host memory: known before anything is allocated.
       FramePlan plan;

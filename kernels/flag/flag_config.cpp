@@ -18,7 +18,8 @@ FlagConfig flag_config(const FilterOptions& options) {
   c.vertical_order = options.choice<FlagVerticalOrder>("vertical_order");
   c.adaptive = adaptive_on(options);
   c.adaptive_tile_px = adaptive_tile_px(options);
-  c.streamed = options.choice<FlagLayerBuffer>("layer_buffer") == FlagLayerBuffer::streamed;
+  c.layer_buffer = options.choice<FlagLayerBuffer>("layer_buffer");
+  c.streamed = c.layer_buffer == FlagLayerBuffer::streamed;
   c.band_rows = options.integer("band_rows");
   return c;
 }

@@ -19,6 +19,7 @@ struct FlagConfig {
   FlagVerticalOrder vertical_order = FlagVerticalOrder::automatic;
   bool adaptive = false;                      // adaptive = on (coc_tiles_gpu.hpp)
   int adaptive_tile_px = 0;                   // adaptive: the tile-max CoC map's tile side, px of FLAG's grid
+  FlagLayerBuffer layer_buffer = FlagLayerBuffer::automatic;  // as chosen (flag_layer_buffering: as run)
   bool streamed = false;                      // layer_buffer = streamed: a ring of rows (flag_gpu.hpp)
   int band_rows = 0;                          // streamed: output rows per band; 0: auto (flag_stream_band_rows)
 };

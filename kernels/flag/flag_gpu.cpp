@@ -141,8 +141,29 @@ std::uint32_t flag_horizontal_invocations_x(FlagHorizontalBins bins, int width_p
 }
 
 const std::vector<std::string>& flag_layer_buffers() {
-  static const std::vector<std::string> buffers = {"full", "streamed"};
+  static const std::vector<std::string> buffers = {"auto", "full", "streamed", "registers"};
   return buffers;
+}
+
+std::string flag_registers_unsupported(const FilterOptions& options) {
+  std::string why;
+  if (!options.aperture.is_disc()) why = fmt::format("the {} aperture", options.aperture.name());
+  else if (options.buffer_scale != 1) why = fmt::format("buffer scale {} (the buffer it reduces is not there)", options.buffer_scale);
+  else if (options.precision != "f32" && options.precision != "f16") why = fmt::format("{} layers", options.precision);
+  else if (adaptive_on(options)) why = "adaptive = on";
+  if (why.empty()) return {};
+  return fmt::format("flag: layer_buffer = registers runs the disc at buffer scale 1 with f32 or f16 layers and "
+                     "adaptive off, not {}; layer_buffer auto or full runs it",
+                     why);
+}
+
+FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::DeviceInfo* device) {
+  const auto chosen = options.choice<FlagLayerBuffer>("layer_buffer");
+  if (chosen != FlagLayerBuffer::automatic) return chosen;
+  const bool runs_registers = device && device->is_software() &&
+                              device->has_subgroup_operations(kFlagScanSubgroupOperations) &&
+                              flag_registers_unsupported(options).empty();
+  return runs_registers ? FlagLayerBuffer::registers : FlagLayerBuffer::full;
 }
 
 // Auto band height: the ring within a byte budget per device kind, never under a floor of rows.
@@ -209,7 +230,7 @@ namespace {
 
 class Flag final : public gpu::GpuFilter {
  public:
-  Flag(GpuFrame& frame, const FlagConfig& config)
+  Flag(GpuFrame& frame, const FlagConfig& config, bool registers)
       : frame_(frame),
         scale_(config.buffer_scale),
         pattern_(reduced_pattern(config.pattern, config.buffer_scale)),
@@ -221,6 +242,15 @@ class Flag final : public gpu::GpuFilter {
         streamed_(config.streamed),
         layer_count_(pattern_.layers()) {
     check_frame_colour(frame, config.precision);
+    if (registers) {  // both passes in one, at full resolution (flag_registers_unsupported)
+      // By constant_id: 0 LAYERS, 2 SPACING. A workgroup is 8 columns (shaders/flag/fused.comp).
+      fused_.emplace(frame.ctx, vk::spirv(std::string("flag/fused_") + to_string(config.precision)),
+                     std::vector<VkDescriptorType>{kBuffer, kBuffer}, sizeof(PassParams),
+                     std::vector<std::int32_t>{layer_count_, 0, pattern_.spacing_px}, vk::LocalSize{8, 1});
+      fused_->bind(0, frame.packed);
+      fused_->bind(1, frame.output);
+      return;
+    }
     const vk::Buffer* flag_input = &frame.packed;
     const vk::Buffer* flag_output = &frame.output;
     if (scale_ > 1) {
@@ -339,6 +369,13 @@ class Flag final : public gpu::GpuFilter {
     PassParams low = grid;
     low.half_n = layer_count_ - 1;  // the layers allocated (adaptive: what the scene needs)
     const auto lw = static_cast<std::uint32_t>(low.width_px), lh = static_cast<std::uint32_t>(low.height_px);
+    if (fused_) {
+      // Workgroups (column block + blocks x column phase, row phase): one per 8 columns of a phase.
+      const auto k = static_cast<std::uint32_t>(pattern_.spacing_px);
+      fused_->dispatch(cmd, &low, ceil_div(ceil_div(lw, k), 8u) * 8u * k, k);
+      timer.end_pass(cmd, "fused");
+      return;
+    }
     if (downsample_) {
       downsample_->dispatch(cmd, &grid, lw, lh);
       timer.end_pass(cmd, "downsample");
@@ -392,7 +429,7 @@ class Flag final : public gpu::GpuFilter {
   }
 
   std::uint64_t intermediate_bytes() const override {
-    std::uint64_t bytes = layers_->allocated_bytes();
+    std::uint64_t bytes = layers_ ? layers_->allocated_bytes() : 0;
     for (const auto* b : {&packed_low_, &output_low_, &brackets_, &disc_area_low_})
       if (*b) bytes += (*b)->allocated_bytes();
     if (tiles_) bytes += tiles_->allocated_bytes();
@@ -445,6 +482,7 @@ class Flag final : public gpu::GpuFilter {
   std::optional<gpu::CocTilesGpu> tiles_;
   std::optional<vk::StorageImage3D> layers_;
   std::optional<vk::ComputePipeline> horizontal_, vertical_, tile_layers_;
+  std::optional<vk::ComputePipeline> fused_;  // layer_buffer = registers: both passes, no layers_
   std::optional<vk::Buffer> packed_low_, output_low_, brackets_, disc_area_low_;
   std::optional<vk::ComputePipeline> downsample_, upsample_, bracket_;
 };
@@ -453,7 +491,10 @@ class Flag final : public gpu::GpuFilter {
 
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options) {
   if (!options.aperture.is_disc()) throw std::logic_error("make_flag_gpu: the disc only (make_flag_shape_gpu: others)");
-  return std::make_unique<Flag>(frame, flag_config(options));
+  const bool registers = flag_layer_buffering(options, &frame.ctx.info()) == FlagLayerBuffer::registers;
+  if (const std::string why = registers ? flag_registers_unsupported(options) : ""; !why.empty())
+    throw std::invalid_argument(why);
+  return std::make_unique<Flag>(frame, flag_config(options), registers);
 }
 
 }  // namespace bokeh

@@ -65,16 +65,29 @@ enum class FlagVerticalOrder { automatic, rows, columns };
 FlagVerticalOrder flag_vertical_ordering(FlagVerticalOrder order, const vk::DeviceInfo& device);
 
 // Where the horizontal pass leaves the layers for the vertical pass, the method's option
-// "layer_buffer". "full" (the default and the reference): the paper's 3D buffer, one row of layers
-// per row of FLAG's grid. "streamed": a ring of rows. The vertical pass at row y reads only rows
-// y - n k .. y + n k, so the frame is cut into bands of B output rows; for each band the horizontal
-// pass writes the rows not yet written up to the band's last row + n k, then the vertical pass sums
-// the band, each a dispatch in the same command buffer with a barrier between. Row y of layers lives
-// in row y mod (B + 2 n k) of the ring, which never overwrites a row a later band still reads. The
-// same layer values in the same order of additions: the full buffer's image bit for bit (every
-// precision), in W x min(H, B + 2 n k) x ceil(N/2) texels instead of W x H x ceil(N/2).
-const std::vector<std::string>& flag_layer_buffers();  // "full", "streamed"
-enum class FlagLayerBuffer { full, streamed };
+// "layer_buffer". "full" (the reference): the paper's 3D buffer, one row of layers per row of FLAG's
+// grid. "streamed": a ring of rows. The vertical pass at row y reads only rows y - n k .. y + n k, so
+// the frame is cut into bands of B output rows; for each band the horizontal pass writes the rows not
+// yet written up to the band's last row + n k, then the vertical pass sums the band, each a dispatch
+// in the same command buffer with a barrier between. Row y of layers lives in row y mod (B + 2 n k) of
+// the ring, which never overwrites a row a later band still reads. The same layer values in the same
+// order of additions: the full buffer's image bit for bit (every precision), in W x min(H, B + 2 n k)
+// x ceil(N/2) texels instead of W x H x ceil(N/2). "registers" (shaders/flag/fused.comp): no buffer;
+// both passes fused, as the CPU reference runs them, each invocation walking down one column with its
+// row's layers and the 2 n + 1 output rows in flight in registers, each layer rounded to f32 or f16
+// (to nearest): the CPU reference's image bit for bit, and the full buffer's with indexed bins (f16: up
+// to its store's rounding, toward zero on lavapipe, which Vulkan allows). lavapipe stores and loads a texel lane by
+// lane, which is most of the full buffer's frame; a GPU has too few such invocations (k^2 W / 8 k
+// workgroups of 8) and too few registers for them. The disc at full resolution, f32 or f16, adaptive
+// off, and a device with the scan's subgroup operations (kFlagScanSubgroupOperations). "auto" (the
+// default): registers where it can run on a CPU device (lavapipe), else full.
+const std::vector<std::string>& flag_layer_buffers();  // "auto", "full", "streamed", "registers"
+enum class FlagLayerBuffer { automatic, full, streamed, registers };
+// Why layer_buffer = registers cannot run these options (empty: it can), device aside.
+std::string flag_registers_unsupported(const FilterOptions& options);
+// The layer buffer `device` runs: `options`' choice, or auto's (device null: full, the reference the
+// models describe where no device is named).
+FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::DeviceInfo* device);
 // Output rows per band as run: `requested` (> 0, the option band_rows), or auto's (0): the largest
 // band whose ring fits kFlagStreamBudgetBytes of the device kind, and at least kFlagStreamMinBand
 // rows. `reach_rows` = n k of FLAG's grid, `row_bytes` = one row of layers (width x layers x texel).

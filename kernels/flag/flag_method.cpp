@@ -48,7 +48,10 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
                     static_cast<double>(flag_bracket_buffer_bytes(ceil_div(h, s), low.layers()))});
   // Every binning reads each pixel's N row samples (scan: as interval ends, loaded once per 8 layers
   // of a segment, the repeats from cache) and writes its layers once.
-  if (c.streamed) {
+  if (c.layer_buffer == FlagLayerBuffer::registers) {  // as on_device resolves auto
+    // Both passes in one dispatch: the same taps, and no layer leaves registers.
+    work.push_back({"fused", 2 * lows * low.size_n, lows * 16, lows * 16});
+  } else if (c.streamed) {
     // Both passes band by band under one timestamp: the same taps and bytes, the layers through the
     // ring (which a GPU's L2 cache can hold) instead of a frame-sized buffer.
     work.push_back({"streamed", 2 * lows * low.size_n, lows * 16 + layer_bytes, layer_bytes + lows * 16});
@@ -60,9 +63,18 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   return work;
 }
 
-MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
-  FlagBufferExtent e = flag_buffer_extent(w, h, c.pattern, c.buffer_scale);
+MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx) {
+  const FlagConfig c = flag_config(o);
   MemoryUse use;
+  if (flag_layer_buffering(o, ctx ? &ctx->info() : nullptr) == FlagLayerBuffer::registers) {
+    // No layer buffer: each invocation's 2 n + 1 running sums and a row's layers and bins, 3 floats
+    // each, live in registers and the driver's stack, not in memory the method allocates.
+    use.from_driver = ctx != nullptr;
+    use.details = {{"layer_buffer_bytes", 0},
+                   {"registers", {{"floats_per_invocation", 3 * (2 * c.pattern.size_n - 1 + c.pattern.layers())}}}};
+    return use;
+  }
+  FlagBufferExtent e = flag_buffer_extent(w, h, c.pattern, c.buffer_scale);
   int band_rows = 0;
   if (c.streamed) {
     // The ring as the GPU driver sizes it (flag_gpu.cpp), for the worst case's layers; no device:
@@ -264,10 +276,14 @@ std::vector<OptionSpec> flag_options() {
           adaptive_tile_option(),
           {"layer_buffer",
            "flag: where the horizontal pass leaves the layers for the vertical pass. full: the paper's 3D buffer "
-           "(W x H x ceil(N/2) texels; the default and the reference); streamed: a ring of B + 2 n k rows filled "
-           "band by band (B = --band-rows output rows a band), the two passes alternating per band in one "
-           "command buffer: the full buffer's image bit for bit in a fraction of its memory",
-           0, 0, 0, false, flag_layer_buffers(), {0, 1}},
+           "(W x H x ceil(N/2) texels; the reference); streamed: a ring of B + 2 n k rows filled band by band "
+           "(B = --band-rows output rows a band), the two passes alternating per band in one command buffer: "
+           "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
+           "fused, each invocation walking down a column with the layers in registers (the disc at buffer scale "
+           "1, f32 or f16, adaptive off): the full buffer's image up to its rounding of each layer, for CPU "
+           "devices (lavapipe stores and loads a texel lane by lane); auto (the default): registers where it "
+           "runs on a CPU device, else full",
+           0, 0, 0, false, flag_layer_buffers(), {1, 2, 3}},
           {"band_rows",
            "flag, layer_buffer = streamed: output rows per band (0: auto, the largest band whose ring fits 16 MiB "
            "on CPU devices such as lavapipe and 32 MiB on GPUs, at least 8 rows). Fewer rows: less memory, more "
@@ -310,12 +326,17 @@ void declare_flag(std::vector<Method>& methods) {
     vk::DeviceRequirements needs;
     needs.storage_image_3d_formats = {layer_format(c.precision)};
     if (c.adaptive) needs.subgroup_operations |= VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;  // the tile map's bound, shared
-    // An explicit scan; auto takes it only on a device that has them.
-    if (c.horizontal_bins == FlagHorizontalBins::scan) needs.subgroup_operations |= kFlagScanSubgroupOperations;
+    // An explicit scan or registers (the same sample hand-over); auto takes them only where they run.
+    if (c.horizontal_bins == FlagHorizontalBins::scan || c.layer_buffer == FlagLayerBuffer::registers)
+      needs.subgroup_operations |= kFlagScanSubgroupOperations;
     return needs;
   };
   // Any convex aperture by per-layer chord extents (flag_shape.hpp); flag_shape_unsupported says with what.
   m.aperture_unsupported = flag_shape_unsupported;
+  m.unsupported = [](const FilterOptions& o, int, int) {
+    return o.choice<FlagLayerBuffer>("layer_buffer") == FlagLayerBuffer::registers ? flag_registers_unsupported(o)
+                                                                                   : std::string();
+  };
   m.cpu_reference = [](const CpuInput& in) {
     const FlagConfig c = flag_config(in.options);
     switch (cpu_path(in.options, c, in.packed.width)) {
@@ -336,6 +357,11 @@ void declare_flag(std::vector<Method>& methods) {
   };
   m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) {
     return o.aperture.is_disc() ? make_flag_gpu(frame, o) : make_flag_shape_gpu(frame, flag_config(o), o.aperture);
+  };
+  m.on_device = [](const FilterOptions& o, const vk::DeviceInfo* device) {
+    FilterOptions as_run = o;  // the enumerators are in the order of the option's choices
+    as_run.values["layer_buffer"] = static_cast<double>(flag_layer_buffering(o, device));
+    return as_run;
   };
   m.work = [](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
@@ -363,7 +389,7 @@ void declare_flag(std::vector<Method>& methods) {
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
     if (!o.aperture.is_disc()) return flag_shape_gpu_memory(flag_config(o), o.aperture, w, h, ctx);
-    return flag_gpu_memory(flag_config(o), w, h, ctx);
+    return flag_gpu_memory(o, w, h, ctx);
   };
   m.cpu_memory_bytes = flag_cpu_memory_bytes;
   // Against the CPU emulation of the same format. Each output sums 2n+1 non-negative layer values,

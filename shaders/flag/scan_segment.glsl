@@ -2,7 +2,6 @@
 // (other apertures) and matching the dispatches of flag_gpu.cpp and flag_shape_gpu.cpp: a workgroup of
 // 8 invocations (lavapipe's SIMD width) is 8 layers of one row segment of SEGMENT columns of one
 // lattice phase. Included after layer_rows.glsl (band_row) and common.glsl (params).
-#extension GL_KHR_shader_subgroup_ballot : require
 layout(constant_id = 6) const int SEGMENT = 256;  // output columns per workgroup, at stride k
 
 // Workgroup (g + G s, r), G = ceil(layer_count / 8): layers z_first = 8 g .. 8 g + 7 of frame row y =
@@ -24,18 +23,4 @@ ScanSegment scan_segment(int layer_count, int k) {
   return segment;
 }
 
-// The samples are loaded in batches of consecutive ones, one a lane, and those that reach the
-// workgroup's layers are handed to all lanes in turn (lavapipe loads an address the lanes share lane by
-// lane): x = the batch's size (the subgroup's lanes: 8 on lavapipe with AVX2, 4 without), y = this
-// lane's place in it.
-ivec2 sample_batch() {
-  const uvec4 lanes = subgroupBallot(true);
-  return ivec2(subgroupBallotBitCount(lanes), subgroupBallotExclusiveBitCount(lanes));
-}
-
-// The lowest lane of the ballot `reaching` (uniform), taken out of it.
-uint take_lowest_lane(inout uvec4 reaching) {
-  const uint lane = subgroupBallotFindLSB(reaching);
-  reaching[lane / 32] &= ~(1u << (lane % 32));
-  return lane;
-}
+#include "lane_batch.glsl"  // sample_batch, take_lowest_lane

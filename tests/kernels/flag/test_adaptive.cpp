@@ -42,6 +42,8 @@ FilterOptions options_for(const std::string& method, const GatherPattern& patter
   o.buffer_scale = scale;
   o.values["adaptive"] = adaptive ? 1 : 0;
   o.values["adaptive_tile_px"] = tile_px;
+  // FLAG's worst case through the same 3D buffer as adaptive's (auto would run registers on lavapipe).
+  if (const OptionSpec* buffer = m.option("layer_buffer")) o.values["layer_buffer"] = buffer->parse("full");
   return o;
 }
 

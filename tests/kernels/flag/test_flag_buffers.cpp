@@ -30,10 +30,12 @@ namespace {
 
 using test::context;
 
-// FLAG's defaults (every option of its own present) at this pattern and precision.
+// FLAG's defaults (every option of its own present) at this pattern and precision, through its 3D
+// buffer (layer_buffer = full), whose formats and reduced extents these tests measure.
 FilterOptions flag_options(const GatherPattern& pattern, const std::string& precision) {
   FilterOptions o = find_method("flag").defaults(pattern);
   o.precision = precision;
+  o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::full);
   return o;
 }
 

@@ -1,4 +1,5 @@
 // GPU passes against the CPU references, on small procedural scenes.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -35,10 +36,12 @@ double max_rel_error(const Image& a, const Image& ref) {
 
 using test::context;
 
-// A method's defaults (every option of its own present) at this pattern and precision.
+// A method's defaults (every option of its own present) at this pattern and precision; FLAG through
+// its 3D buffer (layer_buffer = full), whose passes these tests check (registers: FlagRegisters).
 FilterOptions options_for(const char* method, const GatherPattern& pattern, const std::string& precision) {
   FilterOptions o = find_method(method).defaults(pattern);
   o.precision = precision;
+  if (std::string(method) == "flag") o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::full);
   return o;
 }
 
@@ -151,7 +154,7 @@ TEST(FlagStreamed, EqualsTheFullBufferBitForBit) {
       const Image expected = frame.read_output();
       for (int band : v.bands) {
         FilterOptions streamed = o;
-        streamed.values["layer_buffer"] = 1;
+        streamed.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::streamed);
         streamed.values["band_rows"] = band;
         auto filter = find_method("flag").make_gpu(frame, streamed);
         const auto passes = gpu::run_frames(frame, *filter, timer);
@@ -162,6 +165,82 @@ TEST(FlagStreamed, EqualsTheFullBufferBitForBit) {
       }
     }
   }
+}
+
+// No layer buffer (layer_buffer = registers, shaders/flag/fused.comp): the CPU reference's image bit for
+// bit, f32 and f16, and f32 the full buffer's with indexed bins (the same layer values summed in the same
+// order); at frame edges, partial workgroups, k = 3 and a pattern wider than the frame. It allocates no
+// intermediates and stamps one pass.
+TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
+  struct Frame {
+    int width_px, height_px;
+    GatherPattern pattern;
+  };
+  for (const Frame& f : {Frame{63, 46, {9, 2}}, Frame{63, 46, {7, 3}}, Frame{70, 52, {41, 2}}, Frame{16, 16, {41, 1}}}) {
+    const Scene s = make_scene("hoops", f.width_px, f.height_px);
+    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, f.pattern.max_radius_px() * 1.2);
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, f.pattern);
+    vk::TimestampQueries timer(context(), 16);
+    for (const std::string precision : {"f32", "f16"}) {
+      SCOPED_TRACE(fmt::format("{}x{} N {} k {} {}", f.width_px, f.height_px, f.pattern.size_n, f.pattern.spacing_px,
+                               precision));
+      FilterOptions full = options_for("flag", f.pattern, precision);
+      full.values["horizontal_bins"] = static_cast<double>(FlagHorizontalBins::indexed);
+      auto buffer = find_method("flag").make_gpu(frame, full);
+      gpu::run_frames(frame, *buffer, timer);
+      const Image expected = frame.read_output();
+      FilterOptions registers = full;
+      registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+      auto fused = find_method("flag").make_gpu(frame, registers);
+      const auto passes = gpu::run_frames(frame, *fused, timer);
+      EXPECT_EQ(passes.back().pass, "fused");
+      EXPECT_EQ(fused->intermediate_bytes(), 0u);
+      const Image output = frame.read_output();
+      // The CPU reference rounds each f16 layer to nearest, as the registers do; lavapipe's f16 image
+      // store rounds toward zero (Vulkan allows either): the buffer within the format's bound of it.
+      const LayerPrecision layers = layer_precision_from_string(precision);
+      EXPECT_TRUE(same_bits(output, flag_blur_reference(frame.read_packed(), f.pattern, layers, 2)));
+      if (layers == LayerPrecision::f32) EXPECT_TRUE(same_bits(output, expected));
+      else EXPECT_LE(max_rel_error(output, expected), find_method("flag").gpu_tolerance(registers));
+    }
+  }
+}
+
+// auto runs registers where it can on a CPU device (lavapipe), the full buffer for what registers does
+// not run, and the full buffer where no device is named (the models' reference); an explicit registers
+// it cannot run is refused with the reason.
+TEST(FlagRegisters, AutoChoosesByDeviceAndOptions) {
+  const GatherPattern pattern{41, 2};
+  FilterOptions o = find_method("flag").defaults(pattern);
+  ASSERT_EQ(o.choice<FlagLayerBuffer>("layer_buffer"), FlagLayerBuffer::automatic);
+  const vk::DeviceInfo& device = context().info();
+  const bool runs = device.is_software() && device.has_subgroup_operations(kFlagScanSubgroupOperations);
+  EXPECT_EQ(flag_layer_buffering(o, &device), runs ? FlagLayerBuffer::registers : FlagLayerBuffer::full);
+  EXPECT_EQ(flag_layer_buffering(o, nullptr), FlagLayerBuffer::full);
+  FilterOptions bracketed = o, reduced = o, adaptive = o, shape = o;
+  bracketed.precision = "unorm16_bracketed";
+  reduced.buffer_scale = 2;
+  adaptive.values["adaptive"] = 1;
+  shape.aperture = parse_aperture("blades6");
+  for (FilterOptions* other : {&bracketed, &reduced, &adaptive, &shape}) {
+    EXPECT_EQ(flag_layer_buffering(*other, &device), FlagLayerBuffer::full);
+    other->values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+    const std::string why = find_method("flag").unsupported(*other, 64, 48);
+    EXPECT_NE(why.find("layer_buffer = registers runs the disc"), std::string::npos) << why;
+  }
+  // The models follow the device: no layer buffer, one pass of both passes' taps.
+  const Method& flag = find_method("flag");
+  const FilterOptions as_run = flag.on_device(o, &device);
+  const auto work = flag.work(as_run, 800, 600);
+  if (runs) {
+    ASSERT_EQ(work.size(), 1u);
+    EXPECT_EQ(work[0].pass, "fused");
+    EXPECT_EQ(work[0].taps, 2.0 * 800 * 600 * pattern.size_n);
+    vk::Context ctx;
+    EXPECT_EQ(flag.gpu_memory(o, 800, 600, &ctx).bytes, 0u);
+  }
+  EXPECT_EQ(flag.work(o, 800, 600).size(), 2u);  // no device: horizontal and vertical
+  EXPECT_GT(flag.gpu_memory(o, 800, 600, nullptr).bytes, 0u);
 }
 
 // FLAG with scan bins on the GPU against the vertical pass over its CPU mirror's layers: bit for bit.

@@ -67,7 +67,7 @@ TEST(FlagMemory, CpuWorkCountsNoLayerTraffic) {
 TEST(FlagMemory, StreamedRingIsBandPlusTwiceTheReach) {
   const Method& flag = find_method("flag");
   FilterOptions o = flag.defaults({41, 1});
-  o.values["layer_buffer"] = 1;
+  o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::streamed);
   const MemoryUse model = flag.gpu_memory(o, 1920, 1080, nullptr);  // no device: lavapipe's auto
   EXPECT_EQ(model.details["streamed"]["band_rows"], 12);
   EXPECT_EQ(model.details["extent"]["height"], 52);
@@ -81,7 +81,7 @@ TEST(FlagMemory, StreamedRingIsBandPlusTwiceTheReach) {
   // 2 n k = 80 rows: 106 MiB) does not.
   FilterOptions big = flag.defaults({81, 1});
   EXPECT_GT(flag.gpu_memory(big, 3840, 2160, nullptr).bytes, 2ull << 30);
-  big.values["layer_buffer"] = 1;
+  big.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::streamed);
   EXPECT_EQ(flag.gpu_memory(big, 3840, 2160, nullptr).bytes, 3840ull * 88 * 41 * 8);
   vk::Context ctx;
   big.values["band_rows"] = 8;

@@ -137,7 +137,7 @@ TEST(FlagShape, DeclaresItsScope) {
   o.aperture = parse_aperture("blades5");
   EXPECT_EQ(aperture_unsupported(flag, o), "");
   FilterOptions streamed = o;
-  streamed.values["layer_buffer"] = 1;
+  streamed.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::streamed);
   EXPECT_EQ(aperture_unsupported(flag, streamed), "");
   for (double bins : {1.0, 2.0, 3.0}) {  // indexed, masked, scan
     FilterOptions v = o;
@@ -435,7 +435,7 @@ TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
       const Image expected = frame.read_output();
       for (int band : {1, 5, 0}) {
         FilterOptions streamed = o;
-        streamed.values["layer_buffer"] = 1;
+        streamed.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::streamed);
         streamed.values["band_rows"] = band;
         auto filter = flag.make_gpu(frame, streamed);
         const auto passes = gpu::run_frames(frame, *filter, timer);

@@ -1,0 +1,101 @@
+#version 450
+// FLAG without its 3D buffer, layer_buffer = registers (kernels/flag/flag_gpu.hpp): the horizontal and
+// vertical passes fused, as the CPU reference (flag_blur) runs them. A workgroup of 8 invocations
+// (lavapipe's SIMD width) is 8 neighbouring columns of one lattice phase, c = 8 b + its place, and walks
+// down the rows of one row phase. At each row it bins the row's samples for its columns and sums the
+// bins into layers (flag_bins and flag_layers of layers.glsl, in their order of additions), then adds
+// layer |j| to the running sum of the output row j rows above or below; the output row n rows above is
+// then complete and written, and the sums move up one row. The sums and layers are indexed by
+// constants only (the loops are unrolled), which lavapipe keeps in vector registers and its stack,
+// where the full buffer's passes store and load every texel lane by lane (most of their frame,
+// results/README.md "Layers in registers"). The vertical sums add the same values in the same order
+// as vertical.comp, each layer first rounded to f16 (QUANTIZE_F16, to nearest as the CPU reference
+// rounds; lavapipe's f16 image store rounds toward zero, which Vulkan also allows): the CPU reference's
+// image bit for bit, and f32 the full buffer's with indexed bins. Work per pixel: N row samples, each loaded once by
+// one lane and handed to the lanes whose pattern holds it (lane_batch.glsl), one bin add each, n + 1
+// adds of the layers and 2 n + 1 of the running sums, O(N). On a GPU this is too few invocations
+// (k^2 ceil(W / 8 k) workgroups) holding too many registers (3 (2 n + 1) floats of sums): auto runs it
+// on CPU devices only.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
+#include "common.glsl"
+#include "lane_batch.glsl"
+
+layout(constant_id = 0) const int LAYERS = 21;  // ceil(N/2); n = LAYERS - 1
+layout(constant_id = 2) const int SPACING = 2;  // k, a constant divisor for disc_index
+const int SUMS = 2 * LAYERS - 1;                // output rows in flight, j = -n .. n
+
+layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
+layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
+
+// A layer as the buffer would hold it.
+vec3 stored(vec3 layer) {
+#if QUANTIZE_F16
+  return vec3(unpackHalf2x16(packHalf2x16(layer.rg)), unpackHalf2x16(packHalf2x16(vec2(layer.b, 0.0))).x);
+#else
+  return layer;
+#endif
+}
+
+void main() {
+  const int n = LAYERS - 1, k = SPACING;
+  // Workgroup (b + blocks phase_x, phase_y): lattice columns 8 b .. 8 b + 7 of column phase phase_x.
+  const int blocks = ((params.width_px + k - 1) / k + 7) / 8;
+  const int phase_x = int(gl_WorkGroupID.x) / blocks, b = int(gl_WorkGroupID.x) % blocks;
+  const int phase_y = int(gl_WorkGroupID.y);
+  if (phase_x >= params.width_px || phase_y >= params.height_px) return;  // uniform: a frame under k px
+  const int columns = (params.width_px - 1 - phase_x) / k + 1, rows = (params.height_px - 1 - phase_y) / k + 1;
+  if (8 * b >= columns) return;  // uniform: a phase with fewer columns than the dispatch covers
+  const int c = 8 * b + int(gl_LocalInvocationID.x), x = phase_x + c * k;
+  // The subgroup's columns: first .. first + batch.x - 1 (all 8 on lavapipe with AVX2, 4 without).
+  const ivec2 batch = sample_batch();
+  const int first = c - batch.y, last = first + batch.x - 1;
+  // sums[d]: output row t - n + d, once row t is added (to which row t is row j = n - d below).
+  vec3 sums[SUMS];
+  [[unroll]] for (int d = 0; d < SUMS; ++d) sums[d] = vec3(0.0);
+  // Output row t - n is complete once row t is added: written, and the sums move up one row.
+#define WRITE_AND_MOVE_UP(t)                                                                                \
+  if ((t) >= n && x < params.width_px) result[index_of(ivec2(x, phase_y + ((t) - n) * k))] = vec4(sums[0], 1.0); \
+  [[unroll]] for (int d = 0; d + 1 < SUMS; ++d) sums[d] = sums[d + 1];                                      \
+  sums[SUMS - 1] = vec3(0.0);
+  for (int t = 0; t < rows; ++t) {
+    const int y = phase_y + t * k;
+    vec3 bins[LAYERS];
+    [[unroll]] for (int z = 0; z < LAYERS; ++z) bins[z] = vec3(0.0);
+    // The subgroup's samples, lattice columns first - n .. last + n, left to right in batches.
+    for (int s0 = first - n; s0 <= last + n; s0 += batch.x) {
+      const int s = s0 + batch.y;
+      int index_l = -1;
+      vec3 src_l = vec3(0.0);
+      if (s >= 0 && s < columns) {
+        const vec4 sample_l = packed_input[index_of(ivec2(phase_x + s * k, y))];
+        const int index = disc_index(sample_l.a * sample_l.a, k, 2 * n * n);
+        const int gap = max(max(first - s, s - last), 0);  // to the nearest of the subgroup's columns
+        if (gap <= n && index >= gap * gap) {  // else no column's pattern holds it, or its disc misses them
+          index_l = index;
+          src_l = sample_l.rgb;
+        }
+      }
+      uvec4 reaching = subgroupBallot(index_l >= 0);
+      while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
+        const uint from = take_lowest_lane(reaching);
+        const int i = subgroupShuffle(s, from) - c, index = subgroupShuffle(index_l, from);
+        const vec3 src = subgroupShuffle(src_l, from);
+        const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
+        // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
+        bins[max(z, 0)] += z >= 0 ? src : vec3(0.0);
+      }
+    }
+    vec3 layer[LAYERS];
+    vec3 running = vec3(0.0);
+    [[unroll]] for (int z = LAYERS - 1; z >= 0; --z) {
+      running += bins[z];
+      layer[z] = stored(running);
+    }
+    [[unroll]] for (int d = 0; d < SUMS; ++d) sums[d] += layer[abs(n - d)];
+    WRITE_AND_MOVE_UP(t)
+  }
+  for (int t = rows; t < rows + n; ++t) {  // rows past the frame add nothing
+    WRITE_AND_MOVE_UP(t)
+  }
+}
