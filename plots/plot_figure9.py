@@ -27,6 +27,9 @@ PAPER = ("naive", "flag")
 def label(series, point):
     fit = series["fits"].get("larger_half") or series["fits"].get("all_sizes")
     text = f"{series['method']} ({point['precision']})"
+    as_run = point.get("work", {}).get("options_as_run", {})
+    if "layer_buffer" in as_run:  # what auto became on this device (FLAG: registers on lavapipe)
+        text = f"{series['method']} ({point['precision']}, layers: {as_run['layer_buffer']})"
     if fit:
         text += f"  ~N^{fit['exponent']:.2f} [{fit['low']:.2f}, {fit['high']:.2f}]"
     unclipped = series["fits"].get("larger_half_unclipped")

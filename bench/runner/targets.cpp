@@ -137,9 +137,11 @@ SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::str
       std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
       const auto& model = p.backend == "cpu" && m.cpu_work ? m.cpu_work : m.work;
       const vk::DeviceInfo* device = p.backend == "gpu" && context() ? &context()->info() : nullptr;
-      for (auto& pass : model(m.on_device ? m.on_device(p.options, device) : p.options, w, h))
-        work.push_back(std::move(pass));
+      const FilterOptions as_run = m.on_device ? m.on_device(p.options, device) : p.options;
+      for (auto& pass : model(as_run, w, h)) work.push_back(std::move(pass));
       plans_[i].work = work_json(work, static_cast<double>(w) * h);
+      // What an auto choice became on this device, beside the point's options as given (its id).
+      if (const auto run = m.options_json(as_run); run != m.options_json(p.options)) plans_[i].work["options_as_run"] = run;
       // Device features and limits, memory budget, host memory: known before anything is allocated.
       FramePlan plan;
       plans_[i].skip = plan_frame(p.backend == "gpu" ? context() : nullptr, m, p.options, w, h, max_buffer_mb, plan);
