@@ -132,6 +132,20 @@ FlagHorizontalBins flag_horizontal_binning(FlagHorizontalBins bins, const vk::De
                                                                      : FlagHorizontalBins::indexed;
 }
 
+// layer_buffer = registers: its bins are registers either way, and a masked sample costs LAYERS
+// compare-and-adds where an indexed one costs a load and a store per lane, so masked pays off to more
+// layers than in the 3D buffer's pass. Alone on a 2-core AMD EPYC at 2.6 GHz, 800x600 hoops, k = 2, f16,
+// one interleaved run, FLAG frame masked / indexed (median of the rounds' ratios [95%]): N = 13 0.616
+// [0.609, 0.661]; 21 0.675; 25 0.711; 33 0.800; 41 0.851 [0.837, 0.876]; 57 0.979 [0.977, 1.121]; 81
+// 1.109; 105 1.191; 153 1.517. Auto: masked up to 24 layers (N = 47), indexed beyond (the scan's
+// intervals are the 3D buffer's: registers runs scan as indexed).
+constexpr int kRegistersMaskedLastLayers = 24;
+
+bool flag_registers_masked(FlagHorizontalBins bins, int layers) {
+  return bins == FlagHorizontalBins::masked ||
+         (bins == FlagHorizontalBins::automatic && layers <= kRegistersMaskedLastLayers);
+}
+
 std::uint32_t flag_horizontal_invocations_x(FlagHorizontalBins bins, int width_px, int spacing_px, int layers,
                                             int block) {
   const auto w = static_cast<std::uint32_t>(width_px), k = static_cast<std::uint32_t>(spacing_px);
@@ -243,10 +257,12 @@ class Flag final : public gpu::GpuFilter {
         layer_count_(pattern_.layers()) {
     check_frame_colour(frame, config.precision);
     if (registers) {  // both passes in one, at full resolution (flag_registers_unsupported)
-      // By constant_id: 0 LAYERS, 2 SPACING. A workgroup is 8 columns (shaders/flag/fused.comp).
+      // By constant_id: 0 LAYERS, 2 SPACING, 5 MASKED_BINS. A workgroup is 8 columns (fused.comp).
       fused_.emplace(frame.ctx, vk::spirv(std::string("flag/fused_") + to_string(config.precision)),
                      std::vector<VkDescriptorType>{kBuffer, kBuffer}, sizeof(PassParams),
-                     std::vector<std::int32_t>{layer_count_, 0, pattern_.spacing_px}, vk::LocalSize{8, 1});
+                     std::vector<std::int32_t>{layer_count_, 0, pattern_.spacing_px, 0, 0,
+                                               flag_registers_masked(config.horizontal_bins, layer_count_)},
+                     vk::LocalSize{8, 1});
       fused_->bind(0, frame.packed);
       fused_->bind(1, frame.output);
       return;

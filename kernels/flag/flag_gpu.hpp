@@ -83,6 +83,9 @@ FlagVerticalOrder flag_vertical_ordering(FlagVerticalOrder order, const vk::Devi
 // default): registers where it can run on a CPU device (lavapipe), else full.
 const std::vector<std::string>& flag_layer_buffers();  // "auto", "full", "streamed", "registers"
 enum class FlagLayerBuffer { automatic, full, streamed, registers };
+// layer_buffer = registers bins masked (the option horizontal_bins = masked, or auto up to 24 layers,
+// N = 47, measured in flag_gpu.cpp) or else indexed (scan runs as indexed there).
+bool flag_registers_masked(FlagHorizontalBins bins, int layers);
 // Why layer_buffer = registers cannot run these options (empty: it can), device aside.
 std::string flag_registers_unsupported(const FilterOptions& options);
 // The layer buffer `device` runs: `options`' choice, or auto's (device null: full, the reference the

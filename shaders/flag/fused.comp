@@ -12,8 +12,9 @@
 // as vertical.comp, each layer first rounded to f16 (QUANTIZE_F16, to nearest as the CPU reference
 // rounds; lavapipe's f16 image store rounds toward zero, which Vulkan also allows): the CPU reference's
 // image bit for bit, and f32 the full buffer's with indexed bins. Work per pixel: N row samples, each loaded once by
-// one lane and handed to the lanes whose pattern holds it (lane_batch.glsl), one bin add each, n + 1
-// adds of the layers and 2 n + 1 of the running sums, O(N). On a GPU this is too few invocations
+// one lane and handed to the lanes whose pattern holds it (lane_batch.glsl), one indexed bin add each
+// (a load and a store per lane on lavapipe) or n + 1 masked ones in registers (MASKED_BINS, while the
+// layers are few: flag_registers_masked), n + 1 adds of the layers and 2 n + 1 of the running sums. On a GPU this is too few invocations
 // (k^2 ceil(W / 8 k) workgroups) holding too many registers (3 (2 n + 1) floats of sums): auto runs it
 // on CPU devices only.
 #extension GL_GOOGLE_include_directive : require
@@ -23,6 +24,10 @@
 
 layout(constant_id = 0) const int LAYERS = 21;  // ceil(N/2); n = LAYERS - 1
 layout(constant_id = 2) const int SPACING = 2;  // k, a constant divisor for disc_index
+// The bins as horizontal_bins = masked (layers.glsl): every bin tests its own range of the sample's
+// disc index and adds the sample or -0.0 (which leaves every sum as it is), no dynamically indexed
+// array, which lavapipe turns into a load and a store per lane: cheaper while the layers are few.
+layout(constant_id = 5) const bool MASKED_BINS = false;
 const int SUMS = 2 * LAYERS - 1;                // output rows in flight, j = -n .. n
 
 layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
@@ -81,9 +86,18 @@ void main() {
         const uint from = take_lowest_lane(reaching);
         const int i = subgroupShuffle(s, from) - c, index = subgroupShuffle(index_l, from);
         const vec3 src = subgroupShuffle(src_l, from);
-        const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
-        // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
-        bins[max(z, 0)] += z >= 0 ? src : vec3(0.0);
+        if (MASKED_BINS) {
+          // z^2 <= d < z^2 + width as one unsigned compare (d < z^2 wraps above every width).
+          const int d = i < -n || i > n ? -1 : index - i * i;
+          [[unroll]] for (int z = 0; z < LAYERS; ++z) {
+            const uint width = z == LAYERS - 1 ? 0x7fffffffu : uint(2 * z + 1);
+            bins[z] += uint(d - z * z) < width ? src : vec3(-0.0);
+          }
+        } else {
+          const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
+          // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
+          bins[max(z, 0)] += z >= 0 ? src : vec3(0.0);
+        }
       }
     }
     vec3 layer[LAYERS];

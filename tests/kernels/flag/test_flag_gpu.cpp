@@ -189,19 +189,23 @@ TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
       auto buffer = find_method("flag").make_gpu(frame, full);
       gpu::run_frames(frame, *buffer, timer);
       const Image expected = frame.read_output();
-      FilterOptions registers = full;
-      registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
-      auto fused = find_method("flag").make_gpu(frame, registers);
-      const auto passes = gpu::run_frames(frame, *fused, timer);
-      EXPECT_EQ(passes.back().pass, "fused");
-      EXPECT_EQ(fused->intermediate_bytes(), 0u);
-      const Image output = frame.read_output();
-      // The CPU reference rounds each f16 layer to nearest, as the registers do; lavapipe's f16 image
-      // store rounds toward zero (Vulkan allows either): the buffer within the format's bound of it.
-      const LayerPrecision layers = layer_precision_from_string(precision);
-      EXPECT_TRUE(same_bits(output, flag_blur_reference(frame.read_packed(), f.pattern, layers, 2)));
-      if (layers == LayerPrecision::f32) EXPECT_TRUE(same_bits(output, expected));
-      else EXPECT_LE(max_rel_error(output, expected), find_method("flag").gpu_tolerance(registers));
+      for (const auto bins : {FlagHorizontalBins::indexed, FlagHorizontalBins::masked}) {
+        SCOPED_TRACE(flag_horizontal_bins()[static_cast<std::size_t>(bins)]);
+        FilterOptions registers = full;
+        registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+        registers.values["horizontal_bins"] = static_cast<double>(bins);
+        auto fused = find_method("flag").make_gpu(frame, registers);
+        const auto passes = gpu::run_frames(frame, *fused, timer);
+        EXPECT_EQ(passes.back().pass, "fused");
+        EXPECT_EQ(fused->intermediate_bytes(), 0u);
+        const Image output = frame.read_output();
+        // The CPU reference rounds each f16 layer to nearest, as the registers do; lavapipe's f16 image
+        // store rounds toward zero (Vulkan allows either): the buffer within the format's bound of it.
+        const LayerPrecision layers = layer_precision_from_string(precision);
+        EXPECT_TRUE(same_bits(output, flag_blur_reference(frame.read_packed(), f.pattern, layers, 2)));
+        if (layers == LayerPrecision::f32) EXPECT_TRUE(same_bits(output, expected));
+        else EXPECT_LE(max_rel_error(output, expected), find_method("flag").gpu_tolerance(registers));
+      }
     }
   }
 }
