@@ -136,8 +136,8 @@ SweepTargets::SweepTargets(const std::vector<SweepPoint>& points, const std::str
       check_options(m, p.options);
       std::vector<PassWork> work = {gpu::coc_pass_work(p.options.pattern, w, h)};
       const auto& model = p.backend == "cpu" && m.cpu_work ? m.cpu_work : m.work;
-      const vk::DeviceInfo* device = p.backend == "gpu" && context() ? &context()->info() : nullptr;
-      const FilterOptions as_run = m.on_device ? m.on_device(p.options, device) : p.options;
+      const bool on_gpu = p.backend == "gpu" && context();
+      const FilterOptions as_run = on_gpu && m.on_device ? m.on_device(p.options, &context()->info()) : p.options;
       for (auto& pass : model(as_run, w, h)) work.push_back(std::move(pass));
       plans_[i].work = work_json(work, static_cast<double>(w) * h);
       // What an auto choice became on this device, beside the point's options as given (its id).

@@ -108,9 +108,9 @@ struct Method {
   std::function<Image(const CpuInput&)> cpu_reference;
   std::function<std::unique_ptr<gpu::GpuFilter>(gpu::GpuFrame&, const FilterOptions&)> make_gpu;
   std::function<std::vector<PassWork>(const FilterOptions&, int width_px, int height_px)> work;
-  // The options as `device` runs them, where an option's auto choice changes the passes (null: as
-  // given; device null: a CPU device's choice, lavapipe's): the runner models work on these, while the
-  // point keeps its options as given (auto), so its id and its baseline's stay the same.
+  // The options as the GPU `device` runs them, where an option's auto choice changes the passes (null:
+  // as given): the runner models a GPU point's work on these, while the point keeps its options as
+  // given (auto), so its id and its baseline's stay the same.
   std::function<FilterOptions(const FilterOptions&, const vk::DeviceInfo* device)> on_device;
   // The CPU reference's work where it moves other bytes than the GPU passes (null: `work`'s): the
   // throughput a CPU point reports is this over its frame time.
