@@ -67,11 +67,11 @@ MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx
   const FlagConfig c = flag_config(o);
   MemoryUse use;
   if (flag_layer_buffering(o, ctx ? &ctx->info() : nullptr) == FlagLayerBuffer::registers) {
-    // No layer buffer: each invocation's 2 n + 1 running sums and a row's layers and bins, 3 floats
-    // each, live in registers and the driver's stack, not in memory the method allocates.
+    // No layer buffer: each invocation's N = 2 n + 1 running sums and a row's bins and layers (n + 1
+    // each), 3 floats apiece, live in registers and the driver's stack, not in memory it allocates.
     use.from_driver = ctx != nullptr;
     use.details = {{"layer_buffer_bytes", 0},
-                   {"registers", {{"floats_per_invocation", 3 * (2 * c.pattern.size_n - 1 + c.pattern.layers())}}}};
+                   {"registers", {{"floats_per_invocation", 3 * (c.pattern.size_n + 2 * c.pattern.layers())}}}};
     return use;
   }
   FlagBufferExtent e = flag_buffer_extent(w, h, c.pattern, c.buffer_scale);
