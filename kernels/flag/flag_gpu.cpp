@@ -161,20 +161,20 @@ const std::vector<std::string>& flag_layer_buffers() {
 
 std::string flag_registers_unsupported(const FilterOptions& options) {
   std::string why;
-  if (!options.aperture.is_disc()) why = fmt::format("the {} aperture", options.aperture.name());
-  else if (options.buffer_scale != 1) why = fmt::format("buffer scale {} (the buffer it reduces is not there)", options.buffer_scale);
+  if (options.buffer_scale != 1) why = fmt::format("buffer scale {} (the buffer it reduces is not there)", options.buffer_scale);
   else if (options.precision != "f32" && options.precision != "f16") why = fmt::format("{} layers", options.precision);
   else if (adaptive_on(options)) why = "adaptive = on";
   if (why.empty()) return {};
-  return fmt::format("flag: layer_buffer = registers runs the disc at buffer scale 1 with f32 or f16 layers and "
-                     "adaptive off, not {}; layer_buffer auto or full runs it",
+  return fmt::format("flag: layer_buffer = registers runs buffer scale 1 with f32 or f16 layers and adaptive off, "
+                     "not {}; layer_buffer auto or full runs it",
                      why);
 }
 
 FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::DeviceInfo* device) {
   const auto chosen = options.choice<FlagLayerBuffer>("layer_buffer");
   if (chosen != FlagLayerBuffer::automatic) return chosen;
-  const bool runs_registers = device && device->is_software() &&
+  // Polygon apertures: only when asked (not yet measured against their scan).
+  const bool runs_registers = device && device->is_software() && options.aperture.is_disc() &&
                               device->has_subgroup_operations(kFlagScanSubgroupOperations) &&
                               flag_registers_unsupported(options).empty();
   return runs_registers ? FlagLayerBuffer::registers : FlagLayerBuffer::full;

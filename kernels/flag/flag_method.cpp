@@ -200,17 +200,18 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
   const FlagStreamRing ring = flag_shape_layer_rows(c, layer_count, w, h, ctx ? ctx->info().is_software() : true);
   const FlagBufferExtent& e = ring.extent;
   MemoryUse use;
-  const std::uint64_t texels = e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
+  // layer_buffer = registers (explicit for shapes): no layer buffer, the chord table.
+  const bool registers = c.layer_buffer == FlagLayerBuffer::registers;
+  const std::uint64_t texels = registers ? 0 : e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
   std::uint64_t layers = texels;
-  if (ctx) {
+  if (ctx && !registers)
     layers = vk::image_3d_requirement_bytes(*ctx, layer_format(c.precision), e.width, e.height, e.layers);
-    use.from_driver = true;
-  }
+  use.from_driver = ctx != nullptr;
   // The horizontal pass's table: the row sections (scan) or the chords, as the binning resolves on
   // this device (no device: lavapipe's choice).
   const bool halved = layer_count == c.pattern.layers();
-  const bool scan = flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(), layer_count) ==
-                    FlagHorizontalBins::scan;
+  const bool scan = !registers && flag_shape_binning(c.horizontal_bins, ctx ? ctx->info() : software_device(),
+                                                     layer_count) == FlagHorizontalBins::scan;
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
                       tables = c.pattern.samples_per_pixel() * sizeof(float) +
                                FlagShapeTable::bytes_for(c.pattern, layer_count, scan);
@@ -239,7 +240,7 @@ std::string flag_shape_unsupported(const FilterOptions& o) {
   if (c.adaptive) why.push_back("adaptive = on");
   if (why.empty()) return "";
   return fmt::format("flag draws the aperture {} with f32, f16 or r11g11b10f layers, buffer scale 1 and adaptive "
-                     "off (any horizontal_bins, full or streamed layers), not with {}",
+                     "off (any horizontal_bins, full, streamed or registers layers), not with {}",
                      o.aperture.name(), fmt::join(why, ", "));
 }
 
@@ -279,10 +280,10 @@ std::vector<OptionSpec> flag_options() {
            "(W x H x ceil(N/2) texels; the reference); streamed: a ring of B + 2 n k rows filled band by band "
            "(B = --band-rows output rows a band), the two passes alternating per band in one command buffer: "
            "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
-           "fused, each invocation walking down a column with the layers in registers (the disc at buffer scale "
-           "1, f32 or f16, adaptive off): the full buffer's image up to its rounding of each layer, for CPU "
-           "devices (lavapipe stores and loads a texel lane by lane); auto (the default): registers where it "
-           "runs on a CPU device, else full",
+           "fused, each invocation walking down a column with the layers in registers (buffer scale 1, f32 or "
+           "f16, adaptive off): the CPU reference's image bit for bit, for CPU devices (lavapipe stores and loads "
+           "a texel lane by lane); auto (the default): registers for the disc where it runs on a CPU device, "
+           "else full",
            0, 0, 0, false, flag_layer_buffers(), {1, 2, 3}},
           {"band_rows",
            "flag, layer_buffer = streamed: output rows per band (0: auto, the largest band whose ring fits 16 MiB "
@@ -371,7 +372,9 @@ void declare_flag(std::vector<Method>& methods) {
     const double pixels = static_cast<double>(w) * h;
     const double layer_bytes = pixels * flag_aperture_layers(o.aperture, c.pattern) * bytes_per_texel(c.precision);
     std::vector<PassWork> work = {{"shape_pack", pixels, pixels * 32, pixels * 16}};
-    if (c.streamed)  // both passes band by band under one timestamp (flag_work)
+    if (c.layer_buffer == FlagLayerBuffer::registers)  // both passes in one, no layers (flag_work)
+      work.push_back({"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 16});
+    else if (c.streamed)  // both passes band by band under one timestamp (flag_work)
       work.push_back({"streamed", 2 * pixels * c.pattern.size_n, pixels * 16 + layer_bytes, layer_bytes + pixels * 16});
     else
       work.insert(work.end(), {{"horizontal", pixels * c.pattern.size_n, pixels * 16, layer_bytes},

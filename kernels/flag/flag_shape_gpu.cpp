@@ -6,8 +6,11 @@
 // r11g11b10f, indexed, masked or scan bins, scale 1, adaptive off (flag_method.cpp's aperture_unsupported
 // refuses the others before this is made).
 #include <algorithm>
+#include <optional>
+#include <string>
 #include <stdexcept>
 
+#include "ceil_div.hpp"
 #include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
@@ -47,10 +50,14 @@ namespace {
 
 class FlagShape final : public gpu::GpuFilter {
  public:
-  FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture)
+  FlagShape(gpu::GpuFrame& frame, const FlagConfig& config, const Aperture& aperture, bool registers)
       : frame_(frame),
         table_(aperture, config.pattern),
-        bins_(flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers())),
+        // registers bins by chords, masked or indexed as for the disc (scan's row sections are the 3D
+        // buffer's). blades6 in registers, masked / indexed: 0.74 at N = 9, 0.85 at 21, 0.985 at 41.
+        bins_(!registers ? flag_shape_binning(config.horizontal_bins, frame.ctx.info(), table_.layers())
+              : flag_registers_masked(config.horizontal_bins, table_.layers()) ? FlagHorizontalBins::masked
+                                                                                : FlagHorizontalBins::indexed),
         outputs_(scan() ? 1 : flag_horizontal_block(config.horizontal_block, frame.ctx.info(), table_.layers())),
         sorted_(vk::make_storage_buffer(frame.ctx, table_.lattice.sorted.size() * sizeof(float), "sorted aperture gauges")),
         // The scan reads the row sections, the other binnings the chords: only that one is on the device.
@@ -61,26 +68,39 @@ class FlagShape final : public gpu::GpuFilter {
         rows_(flag_shape_layer_rows(config, table_.layers(), frame.width(), frame.height(),
                                     frame.ctx.info().is_software())),
         streamed_(config.streamed),
-        layers_(frame.ctx, layer_format(config.precision), static_cast<std::uint32_t>(frame.width()),
-                static_cast<std::uint32_t>(rows_.extent.height), static_cast<std::uint32_t>(table_.layers())),
         pack_(frame.ctx, vk::spirv("flag/shape_pack"), std::vector<VkDescriptorType>(4, kBuffer),
-              sizeof(gpu::PassParams)),
-        // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 6 the scan's SEGMENT, 7 LAYER_ROWS
-        // (0: the full buffer), 8 BOTH_HALVES. Scan: a workgroup is 8 layers of one row segment
-        // (lavapipe's 8 SIMD lanes), as the disc's scan.
-        horizontal_(frame.ctx,
-                    vk::spirv(std::string(scan() ? "flag/horizontal_shape_scan_" : "flag/horizontal_shape_") +
-                              to_string(config.precision)),
-                    std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}, sizeof(gpu::PassParams),
-                    std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, outputs_, 0,
-                                              bins_ == FlagHorizontalBins::masked, kFlagScanSegment,
-                                              layer_ring_rows(), !table_.halved},
-                    scan() ? vk::LocalSize{8, 1} : vk::LocalSize{}),
-        vertical_(frame.ctx, vk::spirv("flag/vertical_" + std::string(to_string(config.precision))),
-                  std::vector<VkDescriptorType>{kImage, kBuffer}, sizeof(gpu::PassParams),
-                  std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(), !table_.halved,
-                                            flag_vertical_ordering(config.vertical_order, frame.ctx.info()) ==
-                                                FlagVerticalOrder::columns}) {
+              sizeof(gpu::PassParams)) {
+    const std::string precision = to_string(config.precision);
+    if (registers) {
+      // layer_buffer = registers (shaders/flag/fused.comp with SHAPE): constant ids 0 LAYERS, 2 SPACING,
+      // 5 MASKED_BINS, 8 BOTH_HALVES; a workgroup is 8 columns of a lattice phase.
+      fused_.emplace(frame.ctx, vk::spirv("flag/fused_shape_" + precision),
+                     std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
+                     std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, 0, 0,
+                                               bins_ == FlagHorizontalBins::masked, 0, 0,
+                                               !table_.halved},
+                     vk::LocalSize{8, 1});
+    } else {
+      layers_.emplace(frame.ctx, layer_format(config.precision), static_cast<std::uint32_t>(frame.width()),
+                      static_cast<std::uint32_t>(rows_.extent.height), static_cast<std::uint32_t>(table_.layers()));
+      // constant ids: 0 LAYERS, 2 SPACING, 3 OUTPUTS, 5 MASKED_BINS, 6 the scan's SEGMENT, 7 LAYER_ROWS
+      // (0: the full buffer), 8 BOTH_HALVES. Scan: a workgroup is 8 layers of one row segment
+      // (lavapipe's 8 SIMD lanes), as the disc's scan.
+      horizontal_.emplace(frame.ctx,
+                          vk::spirv(std::string(scan() ? "flag/horizontal_shape_scan_" : "flag/horizontal_shape_") +
+                                    precision),
+                          std::vector<VkDescriptorType>{kBuffer, kImage, kBuffer}, sizeof(gpu::PassParams),
+                          std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, outputs_, 0,
+                                                    bins_ == FlagHorizontalBins::masked, kFlagScanSegment,
+                                                    layer_ring_rows(), !table_.halved},
+                          scan() ? vk::LocalSize{8, 1} : vk::LocalSize{});
+      vertical_.emplace(frame.ctx, vk::spirv("flag/vertical_" + precision),
+                        std::vector<VkDescriptorType>{kImage, kBuffer}, sizeof(gpu::PassParams),
+                        std::vector<std::int32_t>{table_.layers(), 0, 0, 0, 0, 0, 0, layer_ring_rows(),
+                                                  !table_.halved,
+                                                  flag_vertical_ordering(config.vertical_order, frame.ctx.info()) ==
+                                                      FlagVerticalOrder::columns});
+    }
     if (is_bracketed(config.precision) || config.buffer_scale != 1 || config.adaptive)
       throw std::logic_error("make_flag_shape_gpu: a configuration aperture_unsupported refuses");
     check_frame_colour(frame, config.precision);
@@ -95,11 +115,17 @@ class FlagShape final : public gpu::GpuFilter {
     pack_.bind(1, frame.color);
     pack_.bind(2, sorted_);
     pack_.bind(3, weighted_);
-    horizontal_.bind(0, weighted_);
-    horizontal_.bind(1, layers_);
-    horizontal_.bind(2, table_buffer_);
-    vertical_.bind(0, layers_);
-    vertical_.bind(1, frame.output);
+    if (fused_) {
+      fused_->bind(0, weighted_);
+      fused_->bind(1, frame.output);
+      fused_->bind(2, table_buffer_);
+      return;
+    }
+    horizontal_->bind(0, weighted_);
+    horizontal_->bind(1, *layers_);
+    horizontal_->bind(2, table_buffer_);
+    vertical_->bind(0, *layers_);
+    vertical_->bind(1, frame.output);
   }
 
   void record(VkCommandBuffer cmd, vk::TimestampQueries& timer) override {
@@ -108,12 +134,18 @@ class FlagShape final : public gpu::GpuFilter {
     const auto w = static_cast<std::uint32_t>(params.width_px), h = static_cast<std::uint32_t>(params.height_px);
     pack_.dispatch(cmd, &params, w, h);
     timer.end_pass(cmd, "shape_pack");
+    if (fused_) {  // as the disc's (flag_gpu.cpp): one workgroup per 8 columns of a phase
+      const auto k = static_cast<std::uint32_t>(params.spacing_px);
+      fused_->dispatch(cmd, &params, ceil_div(ceil_div(w, k), 8u) * 8u * k, k);
+      timer.end_pass(cmd, "fused");
+      return;
+    }
     const std::uint32_t horizontal_x =
         flag_horizontal_invocations_x(bins_, params.width_px, params.spacing_px, table_.layers(), outputs_);
     if (!streamed_) {
-      horizontal_.dispatch(cmd, &params, horizontal_x, h);
+      horizontal_->dispatch(cmd, &params, horizontal_x, h);
       timer.end_pass(cmd, "horizontal");
-      vertical_.dispatch(cmd, &params, w, h);
+      vertical_->dispatch(cmd, &params, w, h);
       timer.end_pass(cmd, "vertical");
       return;
     }
@@ -127,17 +159,17 @@ class FlagShape final : public gpu::GpuFilter {
       gpu::PassParams band = params;
       if (needed > written) {
         band.band_y0_px = written, band.band_y1_px = needed;
-        horizontal_.dispatch(cmd, &band, horizontal_x, static_cast<std::uint32_t>(needed - written));
+        horizontal_->dispatch(cmd, &band, horizontal_x, static_cast<std::uint32_t>(needed - written));
         written = needed;
       }
       band.band_y0_px = y0, band.band_y1_px = y1;
-      vertical_.dispatch(cmd, &band, w, static_cast<std::uint32_t>(y1 - y0));
+      vertical_->dispatch(cmd, &band, w, static_cast<std::uint32_t>(y1 - y0));
     }
     timer.end_pass(cmd, "streamed");
   }
 
   std::uint64_t intermediate_bytes() const override {
-    return layers_.allocated_bytes() + weighted_.allocated_bytes() + sorted_.allocated_bytes() +
+    return (layers_ ? layers_->allocated_bytes() : 0) + weighted_.allocated_bytes() + sorted_.allocated_bytes() +
            table_buffer_.allocated_bytes();
   }
 
@@ -153,8 +185,10 @@ class FlagShape final : public gpu::GpuFilter {
   vk::Buffer sorted_, table_buffer_, weighted_;
   FlagStreamRing rows_;   // the layer image's extent (streamed: the ring's) and band (0: full)
   bool streamed_;
-  vk::StorageImage3D layers_;
-  vk::ComputePipeline pack_, horizontal_, vertical_;
+  vk::ComputePipeline pack_;
+  std::optional<vk::StorageImage3D> layers_;                    // the 3D buffer's passes
+  std::optional<vk::ComputePipeline> horizontal_, vertical_;
+  std::optional<vk::ComputePipeline> fused_;                    // layer_buffer = registers
 };
 
 }  // namespace
@@ -173,7 +207,7 @@ FlagStreamRing flag_shape_layer_rows(const FlagConfig& c, int layers, int width_
 
 std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
                                                     const Aperture& aperture) {
-  return std::make_unique<FlagShape>(frame, config, aperture);
+  return std::make_unique<FlagShape>(frame, config, aperture, config.layer_buffer == FlagLayerBuffer::registers);
 }
 
 }  // namespace bokeh

@@ -22,13 +22,24 @@
 #include "common.glsl"
 #include "lane_batch.glsl"
 
-layout(constant_id = 0) const int LAYERS = 21;  // ceil(N/2); n = LAYERS - 1
+layout(constant_id = 0) const int LAYERS = 21;  // ceil(N/2), or N for a shape's both halves
 layout(constant_id = 2) const int SPACING = 2;  // k, a constant divisor for disc_index
+#if SHAPE
+// Any convex aperture (kernels/flag/flag_shape.hpp), as horizontal_shape.comp bins it: the input is
+// shape_pack's (colour / area, area), each sample's chord in a column from the chord table. Not
+// mirror-symmetric (BOTH_HALVES): N layers z = dz + n, and row y + j k adds layer n - j.
+layout(constant_id = 8) const bool BOTH_HALVES = false;
+layout(std430, binding = 2) readonly buffer Chords { int chords[]; };  // FlagShapeTable::chords
+const int HALF = BOTH_HALVES ? (LAYERS - 1) / 2 : LAYERS - 1;          // n
+#else
+const bool BOTH_HALVES = false;
+const int HALF = LAYERS - 1;
+#endif
 // The bins as horizontal_bins = masked (layers.glsl): every bin tests its own range of the sample's
 // disc index and adds the sample or -0.0 (which leaves every sum as it is), no dynamically indexed
 // array, which lavapipe turns into a load and a store per lane: cheaper while the layers are few.
 layout(constant_id = 5) const bool MASKED_BINS = false;
-const int SUMS = 2 * LAYERS - 1;                // output rows in flight, j = -n .. n
+const int SUMS = 2 * HALF + 1;                  // output rows in flight, j = -n .. n
 
 layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
@@ -43,7 +54,7 @@ vec3 stored(vec3 layer) {
 }
 
 void main() {
-  const int n = LAYERS - 1, k = SPACING;
+  const int n = HALF, k = SPACING;
   // Workgroup (b + blocks phase_x, phase_y): lattice columns 8 b .. 8 b + 7 of column phase phase_x.
   const int blocks = ((params.width_px + k - 1) / k + 7) / 8;
   const int phase_x = int(gl_WorkGroupID.x) / blocks, b = int(gl_WorkGroupID.x) % blocks;
@@ -74,9 +85,14 @@ void main() {
       vec3 src_l = vec3(0.0);
       if (s >= 0 && s < columns) {
         const vec4 sample_l = packed_input[index_of(ivec2(phase_x + s * k, y))];
-        const int index = disc_index(sample_l.a * sample_l.a, k, 2 * n * n);
         const int gap = max(max(first - s, s - last), 0);  // to the nearest of the subgroup's columns
+#if SHAPE
+        const int index = int(sample_l.a);  // its row of the chord table
+        if (gap <= n) {  // else no column's pattern holds it
+#else
+        const int index = disc_index(sample_l.a * sample_l.a, k, 2 * n * n);
         if (gap <= n && index >= gap * gap) {  // else no column's pattern holds it, or its disc misses them
+#endif
           index_l = index;
           src_l = sample_l.rgb;
         }
@@ -86,6 +102,21 @@ void main() {
         const uint from = take_lowest_lane(reaching);
         const int i = subgroupShuffle(s, from) - c, index = subgroupShuffle(index_l, from);
         const vec3 src = subgroupShuffle(src_l, from);
+#if SHAPE
+        // The offset from the source to this column is -i k: lattice column n - i of the table.
+        const int side = 2 * n + 1, chord = i < -n || i > n ? 0 : chords[(n - i) * (side * side + 1) + index];
+        const int lo = (chord & 0xffff) - n, hi = (chord >> 16) - n - 1;
+        // +colour at its far layer, -colour below its near one (both halves only); none without a chord.
+        const int far = chord == 0 ? -1 : (BOTH_HALVES ? hi + n : hi);
+        const int past = chord != 0 && BOTH_HALVES && lo > -n ? lo - 1 + n : -1;
+        if (MASKED_BINS) {
+          [[unroll]] for (int z = 0; z < LAYERS; ++z) bins[z] += z == far ? src : (z == past ? -src : vec3(-0.0));
+        } else {
+          // Without an event, 0.0 to or from bin 0: x + 0.0 and x - 0.0 are x (no bin holds -0.0).
+          bins[max(far, 0)] += far >= 0 ? src : vec3(0.0);
+          if (BOTH_HALVES) bins[max(past, 0)] -= past >= 0 ? src : vec3(0.0);
+        }
+#else
         if (MASKED_BINS) {
           // z^2 <= d < z^2 + width as one unsigned compare (d < z^2 wraps above every width).
           const int d = i < -n || i > n ? -1 : index - i * i;
@@ -98,6 +129,7 @@ void main() {
           // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
           bins[max(z, 0)] += z >= 0 ? src : vec3(0.0);
         }
+#endif
       }
     }
     vec3 layer[LAYERS];
@@ -106,7 +138,7 @@ void main() {
       running += bins[z];
       layer[z] = stored(running);
     }
-    [[unroll]] for (int d = 0; d < SUMS; ++d) sums[d] += layer[abs(n - d)];
+    [[unroll]] for (int d = 0; d < SUMS; ++d) sums[d] += layer[BOTH_HALVES ? d : abs(n - d)];
     WRITE_AND_MOVE_UP(t)
   }
   for (int t = rows; t < rows + n; ++t) {  // rows past the frame add nothing

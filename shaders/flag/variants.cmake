@@ -39,5 +39,7 @@ foreach(entry IN ITEMS f32:rgba32f f16:rgba16f r11g11b10f:r11f_g11f_b10f)
 endforeach()
 # layer_buffer = registers (kernels/flag/flag_gpu.hpp): both passes fused, the layers in registers,
 # rounded as the f32 or f16 buffer stores them.
-bokeh_shader(flag fused_f32 fused.comp QUANTIZE_F16=0)
-bokeh_shader(flag fused_f16 fused.comp QUANTIZE_F16=1)
+bokeh_shader(flag fused_f32 fused.comp QUANTIZE_F16=0 SHAPE=0)
+bokeh_shader(flag fused_f16 fused.comp QUANTIZE_F16=1 SHAPE=0)
+bokeh_shader(flag fused_shape_f32 fused.comp QUANTIZE_F16=0 SHAPE=1)
+bokeh_shader(flag fused_shape_f16 fused.comp QUANTIZE_F16=1 SHAPE=1)

@@ -386,6 +386,43 @@ TEST(FlagShape, GpuMatchesCpuReference) {
         }
 }
 
+// layer_buffer = registers for a polygon (shaders/flag/fused.comp with SHAPE, asked for explicitly):
+// the CPU reference's image bit for bit (f32 and f16: the same chords and layer values, each rounded to
+// nearest, summed in the same order), halved shapes and both halves, indexed and masked bins; and no
+// layer buffer, one fused pass after shape_pack.
+TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
+  const Method& flag = find_method("flag");
+  const Scene s = make_scene("hoops", 63, 46);
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}, GatherPattern{7, 3}})
+    for (const char* name : {"blades5", "blades6", "blades7-rot15-curv0.3"})
+      for (const char* precision : {"f32", "f16"})
+        for (const auto bins : {FlagHorizontalBins::indexed, FlagHorizontalBins::masked}) {
+          SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n) + " k " +
+                       std::to_string(pattern.spacing_px) + " " + flag_horizontal_bins()[std::size_t(bins)]);
+          FilterOptions o = flag.defaults(pattern);
+          o.precision = precision;
+          o.aperture = parse_aperture(name);
+          o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+          o.values["horizontal_bins"] = static_cast<double>(bins);
+          ASSERT_EQ(flag.unsupported(o, 63, 46), "");
+          const Lens lens = shape_lens(s, pattern, o.aperture);
+          const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, o, 2);
+          std::vector<vk::PassTime> passes;
+          const Image gpu = run_gpu(context(), flag, s.color, s.depth_m, lens, o, &passes);
+          ASSERT_EQ(passes.size(), 3u);
+          EXPECT_EQ(passes[1].pass, "shape_pack");
+          EXPECT_EQ(passes[2].pass, "fused");
+          EXPECT_TRUE(test::same_bits(gpu, cpu));
+        }
+  FilterOptions o = flag.defaults({41, 2});
+  o.aperture = parse_aperture("blades5");
+  o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+  EXPECT_EQ(flag.gpu_memory(o, 800, 600, nullptr).details["layer_buffer_bytes"], 0);
+  FilterOptions polygon = flag.defaults({41, 2});
+  polygon.aperture = o.aperture;
+  EXPECT_EQ(flag_layer_buffering(polygon, &context().info()), FlagLayerBuffer::full);  // auto: the 3D buffer
+}
+
 // Masked bins (a compare per bin instead of an indexed add) add the same values to the same bins: the
 // indexed bins' image bit for bit, both halves or one, every horizontal block.
 TEST(FlagShape, MaskedBinsMatchIndexedBitForBit) {
