@@ -161,9 +161,12 @@ const std::vector<std::string>& flag_layer_buffers() {
 
 std::string flag_registers_unsupported(const FilterOptions& options) {
   std::string why;
-  if (options.buffer_scale != 1) why = fmt::format("buffer scale {} (the buffer it reduces is not there)", options.buffer_scale);
-  else if (options.precision != "f32" && options.precision != "f16") why = fmt::format("{} layers", options.precision);
-  else if (adaptive_on(options)) why = "adaptive = on";
+  if (options.buffer_scale != 1)
+    why = fmt::format("buffer scale {} (the buffer it reduces is not there)", options.buffer_scale);
+  else if (options.precision != "f32" && options.precision != "f16")
+    why = fmt::format("{} layers", options.precision);
+  else if (adaptive_on(options))
+    why = "adaptive = on";
   if (why.empty()) return {};
   return fmt::format("flag: layer_buffer = registers runs buffer scale 1 with f32 or f16 layers and adaptive off, "
                      "not {}; layer_buffer auto or full runs it",

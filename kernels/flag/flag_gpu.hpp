@@ -76,9 +76,9 @@ FlagVerticalOrder flag_vertical_ordering(FlagVerticalOrder order, const vk::Devi
 // both passes fused, as the CPU reference runs them, each invocation walking down one column with its
 // row's layers and the 2 n + 1 output rows in flight in registers, each layer rounded to f32 or f16
 // (to nearest): the CPU reference's image bit for bit, and the full buffer's with indexed bins (f16: up
-// to its store's rounding, toward zero on lavapipe, which Vulkan allows). lavapipe stores and loads a texel lane by
-// lane, which is most of the full buffer's frame; a GPU has too few such invocations (k^2 W / 8 k
-// workgroups of 8) and too few registers for them. Full resolution, f32 or f16, adaptive off, and a
+// to its store's rounding, toward zero on lavapipe, which Vulkan allows). lavapipe stores and loads a
+// texel lane by lane, which is most of the full buffer's frame; a GPU has too few such invocations
+// (k^2 W / 8 k workgroups of 8) and too few registers for them. Full resolution, f32 or f16, adaptive off, and a
 // device with the scan's subgroup operations (kFlagScanSubgroupOperations); any aperture (polygons:
 // flag_shape_gpu.cpp, chords as horizontal_shape.comp). "auto" (the default): registers for the disc
 // where it can run on a CPU device (lavapipe), else full (polygons keep their scan: not yet measured).

@@ -3,20 +3,21 @@
 // vertical passes fused, as the CPU reference (flag_blur) runs them. A workgroup of 8 invocations
 // (lavapipe's SIMD width) is 8 neighbouring columns of one lattice phase, c = 8 b + its place, and walks
 // down the rows of one row phase. At each row it bins the row's samples for its columns and sums the
-// bins into layers (flag_bins and flag_layers of layers.glsl, in their order of additions), then adds
-// layer |j| to the running sum of the output row j rows above or below; the output row n rows above is
-// then complete and written, and the sums move up one row. The sums and layers are indexed by
-// constants only (the loops are unrolled), which lavapipe keeps in vector registers and its stack,
-// where the full buffer's passes store and load every texel lane by lane (most of their frame,
-// results/README.md "Layers in registers"). The vertical sums add the same values in the same order
-// as vertical.comp, each layer first rounded to f16 (QUANTIZE_F16, to nearest as the CPU reference
-// rounds; lavapipe's f16 image store rounds toward zero, which Vulkan also allows): the CPU reference's
-// image bit for bit, and f32 the full buffer's with indexed bins. Work per pixel: N row samples, each loaded once by
-// one lane and handed to the lanes whose pattern holds it (lane_batch.glsl), one indexed bin add each
-// (a load and a store per lane on lavapipe) or n + 1 masked ones in registers (MASKED_BINS, while the
-// layers are few: flag_registers_masked), n + 1 adds of the layers and 2 n + 1 of the running sums. On a GPU this is too few invocations
-// (k^2 ceil(W / 8 k) workgroups) holding too many registers (3 (2 n + 1) floats of sums): auto runs it
-// on CPU devices only.
+// bins into layers (flag_bins and flag_layers of layers.glsl, or horizontal_shape.comp's chords with
+// SHAPE, in their order of additions), then adds layer |j| to the running sum of the output row j rows
+// away; the output row n rows above is then complete and written, and the sums move up one row. The
+// sums and layers are indexed by constants only (the loops are unrolled), which lavapipe keeps in
+// vector registers and its stack, where the full buffer's passes store and load every texel lane by
+// lane (most of their frame, results/README.md "Layers in registers"). The vertical sums add the same
+// values in the same order as vertical.comp, each layer first rounded to f16 (QUANTIZE_F16, to nearest
+// as the CPU reference rounds; lavapipe's f16 image store rounds toward zero, which Vulkan also
+// allows): the CPU reference's image bit for bit, and f32 the full buffer's with indexed bins.
+// Work per pixel: N row samples, each loaded once by one lane and handed to the lanes whose pattern
+// holds it (lane_batch.glsl), one indexed bin add each (a load and a store per lane on lavapipe) or a
+// masked add per layer in registers (MASKED_BINS, while the layers are few: flag_registers_masked), a
+// sum over the layers and 2 n + 1 adds of the running sums. On a GPU this is too few invocations (k^2
+// ceil(W / 8 k) workgroups) holding too many registers (3 (2 n + 1) floats of sums): auto runs it on
+// CPU devices only.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"

@@ -412,9 +412,10 @@ TEST(SpritesAperture, APatternBeyondTheShapeTableIsDeclaredUnsupported) {
 // flush (kernels/vk/timestamps.cpp): each pass then reads as the next one, so after a sprites frame a
 // naive frame's CoC pass took the gather's time and the gather next to none. The gather does N^2 =
 // 1681 taps a pixel where the CoC pass does 41 columns: shifted stamps invert that order. Three
-// draw-then-naive frames, their medians compared: one frame's pass can stall behind a process on the
-// other core (a clean-clone run saw the CoC pass at 9.7 ms beside a 9.3 ms gather), where shifted
-// stamps leave the gather next to nothing in every frame.
+// draw-then-naive frames, their fastest compared: a pass can stall behind a process on the other core
+// (clean-clone runs saw the CoC pass at 9.7 ms beside a 9.3 ms gather, and a median CoC of 8.95 ms
+// beside 8.33), and a stall only adds time, where shifted stamps leave the gather next to nothing in
+// every frame.
 TEST(Sprites, TimestampsStayWithTheirPassesAfterADraw) {
   SKIP_IF_NO_GRAPHICS();
   const Scene scene = make_scene("hoops", 200, 150);
@@ -432,7 +433,7 @@ TEST(Sprites, TimestampsStayWithTheirPassesAfterADraw) {
   }
   std::sort(coc_ms.begin(), coc_ms.end());
   std::sort(gather_ms.begin(), gather_ms.end());
-  EXPECT_GT(gather_ms[1], coc_ms[1]) << "median coc " << coc_ms[1] << " ms, gather " << gather_ms[1] << " ms";
+  EXPECT_GT(gather_ms[0], coc_ms[0]) << "fastest coc " << coc_ms[0] << " ms, gather " << gather_ms[0] << " ms";
 }
 
 }  // namespace
