@@ -183,6 +183,17 @@ FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::Dev
   return runs_registers ? FlagLayerBuffer::registers : FlagLayerBuffer::full;
 }
 
+bool flag_runs_registers(const FilterOptions& options, const vk::DeviceInfo& device) {
+  if (flag_layer_buffering(options, &device) != FlagLayerBuffer::registers) return false;
+  if (const std::string why = flag_registers_unsupported(options); !why.empty()) throw std::invalid_argument(why);
+  return true;
+}
+
+std::uint32_t flag_fused_invocations_x(int width_px, int spacing_px) {
+  const auto k = static_cast<std::uint32_t>(spacing_px);
+  return ceil_div(ceil_div(static_cast<std::uint32_t>(width_px), k), 8u) * 8u * k;
+}
+
 // Auto band height: the ring within a byte budget per device kind, never under a floor of rows.
 // lavapipe runs each dispatch to completion across its threads, so every band costs two pipeline
 // launches and two thread-pool barriers: it wants few, tall bands; 16 MiB is the goal at
@@ -390,8 +401,8 @@ class Flag final : public gpu::GpuFilter {
     const auto lw = static_cast<std::uint32_t>(low.width_px), lh = static_cast<std::uint32_t>(low.height_px);
     if (fused_) {
       // Workgroups (column block + blocks x column phase, row phase): one per 8 columns of a phase.
-      const auto k = static_cast<std::uint32_t>(pattern_.spacing_px);
-      fused_->dispatch(cmd, &low, ceil_div(ceil_div(lw, k), 8u) * 8u * k, k);
+      fused_->dispatch(cmd, &low, flag_fused_invocations_x(low.width_px, pattern_.spacing_px),
+                       static_cast<std::uint32_t>(pattern_.spacing_px));
       timer.end_pass(cmd, "fused");
       return;
     }
@@ -510,10 +521,7 @@ class Flag final : public gpu::GpuFilter {
 
 std::unique_ptr<gpu::GpuFilter> make_flag_gpu(GpuFrame& frame, const FilterOptions& options) {
   if (!options.aperture.is_disc()) throw std::logic_error("make_flag_gpu: the disc only (make_flag_shape_gpu: others)");
-  const bool registers = flag_layer_buffering(options, &frame.ctx.info()) == FlagLayerBuffer::registers;
-  if (const std::string why = registers ? flag_registers_unsupported(options) : ""; !why.empty())
-    throw std::invalid_argument(why);
-  return std::make_unique<Flag>(frame, flag_config(options), registers);
+  return std::make_unique<Flag>(frame, flag_config(options), flag_runs_registers(options, frame.ctx.info()));
 }
 
 }  // namespace bokeh

@@ -92,6 +92,13 @@ std::string flag_registers_unsupported(const FilterOptions& options);
 // The layer buffer `device` runs: `options`' choice, or auto's (device null: full, the reference the
 // models describe where no device is named).
 FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::DeviceInfo* device);
+// Whether `device` runs layer_buffer = registers for these options (the GPU filters of every aperture
+// ask this once); throws std::invalid_argument with flag_registers_unsupported's reason where registers
+// is asked for and cannot run.
+bool flag_runs_registers(const FilterOptions& options, const vk::DeviceInfo& device);
+// Invocations along a row of the fused pass (shaders/flag/fused.comp), the disc's and other apertures':
+// k phases x ceil(ceil(W / k) / 8) workgroups of 8 columns.
+std::uint32_t flag_fused_invocations_x(int width_px, int spacing_px);
 // Output rows per band as run: `requested` (> 0, the option band_rows), or auto's (0): the largest
 // band whose ring fits kFlagStreamBudgetBytes of the device kind, and at least kFlagStreamMinBand
 // rows. `reach_rows` = n k of FLAG's grid, `row_bytes` = one row of layers (width x layers x texel).

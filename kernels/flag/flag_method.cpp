@@ -357,7 +357,7 @@ void declare_flag(std::vector<Method>& methods) {
     return flag_blur(in.packed, c.pattern, c.precision, in.threads);
   };
   m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) {
-    return o.aperture.is_disc() ? make_flag_gpu(frame, o) : make_flag_shape_gpu(frame, flag_config(o), o.aperture);
+    return o.aperture.is_disc() ? make_flag_gpu(frame, o) : make_flag_shape_gpu(frame, o);
   };
   m.on_device = [](const FilterOptions& o, const vk::DeviceInfo* device) {
     FilterOptions as_run = o;  // the enumerators are in the order of the option's choices

@@ -10,7 +10,6 @@
 #include <string>
 #include <stdexcept>
 
-#include "ceil_div.hpp"
 #include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
@@ -135,8 +134,8 @@ class FlagShape final : public gpu::GpuFilter {
     pack_.dispatch(cmd, &params, w, h);
     timer.end_pass(cmd, "shape_pack");
     if (fused_) {  // as the disc's (flag_gpu.cpp): one workgroup per 8 columns of a phase
-      const auto k = static_cast<std::uint32_t>(params.spacing_px);
-      fused_->dispatch(cmd, &params, ceil_div(ceil_div(w, k), 8u) * 8u * k, k);
+      fused_->dispatch(cmd, &params, flag_fused_invocations_x(params.width_px, params.spacing_px),
+                       static_cast<std::uint32_t>(params.spacing_px));
       timer.end_pass(cmd, "fused");
       return;
     }
@@ -205,9 +204,9 @@ FlagStreamRing flag_shape_layer_rows(const FlagConfig& c, int layers, int width_
   return ring;
 }
 
-std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
-                                                    const Aperture& aperture) {
-  return std::make_unique<FlagShape>(frame, config, aperture, config.layer_buffer == FlagLayerBuffer::registers);
+std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FilterOptions& options) {
+  return std::make_unique<FlagShape>(frame, flag_config(options), options.aperture,
+                                     flag_runs_registers(options, frame.ctx.info()));
 }
 
 }  // namespace bokeh

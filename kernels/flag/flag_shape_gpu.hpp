@@ -10,10 +10,10 @@ namespace bokeh {
 
 struct FlagConfig;
 // FLAG for a non-disc aperture (flag_shape.hpp, flag_shape_gpu.cpp): passes shape_pack, horizontal
-// (chord extents, or row sections with horizontal_bins = scan), vertical (or both as "streamed"), in the
-// configurations Method::aperture_unsupported accepts (per-value precisions, scale 1, adaptive off).
-std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FlagConfig& config,
-                                                    const Aperture& aperture);
+// (chord extents, or row sections with horizontal_bins = scan), vertical (or both as "streamed", or
+// one "fused" with layer_buffer = registers), in the configurations Method::aperture_unsupported accepts
+// (per-value precisions, scale 1, adaptive off) for options.aperture.
+std::unique_ptr<gpu::GpuFilter> make_flag_shape_gpu(gpu::GpuFrame& frame, const FilterOptions& options);
 // The horizontal pass's binning for a non-disc aperture of `layers` layers: `bins` as chosen; auto:
 // indexed on GPUs, on software devices scan from 7 layers on where the device has the scan's subgroup
 // operations, else indexed (flag_shape_gpu.cpp has the measurements).

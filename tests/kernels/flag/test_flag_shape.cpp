@@ -418,6 +418,12 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
   o.aperture = parse_aperture("blades5");
   o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
   EXPECT_EQ(flag.gpu_memory(o, 800, 600, nullptr).details["layer_buffer_bytes"], 0);
+  // A polygon asked for in registers at a precision they do not run: refused with the reason.
+  FilterOptions r11 = o;
+  r11.pattern = {9, 2};
+  r11.precision = "r11g11b10f";
+  const Lens lens = shape_lens(s, r11.pattern, r11.aperture);
+  EXPECT_THROW(run_gpu(context(), flag, s.color, s.depth_m, lens, r11), std::invalid_argument);
   FilterOptions polygon = flag.defaults({41, 2});
   polygon.aperture = o.aperture;
   EXPECT_EQ(flag_layer_buffering(polygon, &context().info()), FlagLayerBuffer::full);  // auto: the 3D buffer
