@@ -45,10 +45,20 @@ const int SUMS = 2 * HALF + 1;                  // output rows in flight, j = -n
 layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
 
-// A layer as the buffer would hold it.
+// A layer as the buffer would hold it. f16: each channel rounded to the nearest, ties to even, as
+// Imath::half rounds in the CPU reference, in vector arithmetic: lavapipe converts packHalf2x16 and
+// unpackHalf2x16 lane by lane (a fifth of the frame at N = 81).
 vec3 stored(vec3 layer) {
 #if QUANTIZE_F16
-  return vec3(unpackHalf2x16(packHalf2x16(layer.rg)), unpackHalf2x16(packHalf2x16(vec2(layer.b, 0.0))).x);
+  const uvec3 bits = floatBitsToUint(layer);
+  // f16's normal range: 10 of the 23 fraction bits kept, ties to even (a carry into the exponent is the
+  // right result). Quiet NaNs stay NaN and infinities infinite.
+  vec3 rounded = uintBitsToFloat((bits + 0xfffu + ((bits >> 13) & 1u)) & ~0x1fffu);
+  // Below 2^-14, f16's subnormals: multiples of 2^-24 (both scalings exact).
+  rounded = mix(rounded, roundEven(layer * 16777216.0) * 5.9604644775390625e-08,
+                lessThan(abs(layer), vec3(6.103515625e-05)));
+  // Beyond f16's largest finite value, 65504: infinity of the layer's sign.
+  return mix(rounded, uintBitsToFloat((bits & 0x80000000u) | 0x7f800000u), greaterThan(abs(rounded), vec3(65504.0)));
 #else
   return layer;
 #endif
@@ -100,8 +110,9 @@ void main() {
       }
       uvec4 reaching = subgroupBallot(index_l >= 0);
       while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
+        // Every lane is active, so lane `from` (its place in the batch) loaded sample s0 + from.
         const uint from = take_lowest_lane(reaching);
-        const int i = subgroupShuffle(s, from) - c, index = subgroupShuffle(index_l, from);
+        const int i = s0 + int(from) - c, index = subgroupShuffle(index_l, from);
         const vec3 src = subgroupShuffle(src_l, from);
 #if SHAPE
         // The offset from the source to this column is -i k: lattice column n - i of the table.

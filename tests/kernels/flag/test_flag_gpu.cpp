@@ -210,6 +210,35 @@ TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
   }
 }
 
+// The registers' f16 rounding (vector arithmetic, not packHalf2x16) at the format's edges, against
+// Imath::half in the CPU reference bit for bit: a band of the frame darkened into f16's subnormals and
+// flushed zeros, one brightened past its largest value (infinite layers), one left in the normal range.
+TEST(FlagRegisters, F16LayersRoundAsTheCpuReferenceAtTheFormatsEdges) {
+  Scene s = make_scene("hoops", 72, 48);
+  for (int y = 0; y < s.color.height; ++y)
+    for (int x = 0; x < s.color.width; ++x)
+      for (int c = 0; c < 3; ++c) s.color.px(x, y)[c] *= x < 24 ? 1e-6f : (x < 48 ? 1.0f : 1e6f);
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{41, 2}}) {  // masked and indexed bins
+    SCOPED_TRACE(fmt::format("N {}", pattern.size_n));
+    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+    vk::TimestampQueries timer(context(), 16);
+    FilterOptions registers = options_for("flag", pattern, "f16");
+    registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+    auto fused = find_method("flag").make_gpu(frame, registers);
+    gpu::run_frames(frame, *fused, timer);
+    const Image output = frame.read_output();
+    EXPECT_TRUE(same_bits(output, flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2)));
+    int subnormal = 0, infinite = 0;  // the edges were reached
+    for (const float v : output.pixels) {
+      subnormal += v > 0 && v < 6.103515625e-05f;
+      infinite += std::isinf(v);
+    }
+    EXPECT_GT(subnormal, 0);
+    EXPECT_GT(infinite, 0);
+  }
+}
+
 // auto runs registers where it can on a CPU device (lavapipe), the full buffer for what registers does
 // not run or polygons, and the full buffer where no device is named (the models' reference); an explicit
 // registers it cannot run is refused with the reason.
