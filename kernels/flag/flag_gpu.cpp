@@ -176,8 +176,9 @@ std::string flag_registers_unsupported(const FilterOptions& options) {
 FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::DeviceInfo* device) {
   const auto chosen = options.choice<FlagLayerBuffer>("layer_buffer");
   if (chosen != FlagLayerBuffer::automatic) return chosen;
-  // Polygon apertures: only when asked (not yet measured against their scan).
-  const bool runs_registers = device && device->is_software() && options.aperture.is_disc() &&
+  // Every aperture: polygons too, measured faster than their buffer and its scan at N = 9-153, halved or
+  // both halves, f16 and f32 (results/README.md, "Layers in registers").
+  const bool runs_registers = device && device->is_software() &&
                               device->has_subgroup_operations(kFlagScanSubgroupOperations) &&
                               flag_registers_unsupported(options).empty();
   return runs_registers ? FlagLayerBuffer::registers : FlagLayerBuffer::full;

@@ -80,8 +80,8 @@ FlagVerticalOrder flag_vertical_ordering(FlagVerticalOrder order, const vk::Devi
 // texel lane by lane, which is most of the full buffer's frame; a GPU has too few such invocations
 // (k^2 W / 8 k workgroups of 8) and too few registers for them. Full resolution, f32 or f16, adaptive off, and a
 // device with the scan's subgroup operations (kFlagScanSubgroupOperations); any aperture (polygons:
-// flag_shape_gpu.cpp, chords as horizontal_shape.comp). "auto" (the default): registers for the disc
-// where it can run on a CPU device (lavapipe), else full (polygons keep their scan: not yet measured).
+// flag_shape_gpu.cpp, chords as horizontal_shape.comp). "auto" (the default): registers where it can
+// run on a CPU device (lavapipe), any aperture, else full.
 const std::vector<std::string>& flag_layer_buffers();  // "auto", "full", "streamed", "registers"
 enum class FlagLayerBuffer { automatic, full, streamed, registers };
 // layer_buffer = registers bins masked (the option horizontal_bins = masked, or auto up to 24 layers,

@@ -200,7 +200,7 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
   const FlagStreamRing ring = flag_shape_layer_rows(c, layer_count, w, h, ctx ? ctx->info().is_software() : true);
   const FlagBufferExtent& e = ring.extent;
   MemoryUse use;
-  // layer_buffer = registers (explicit for shapes): no layer buffer, the chord table.
+  // layer_buffer = registers: no layer buffer, the chord table.
   const bool registers = c.layer_buffer == FlagLayerBuffer::registers;
   const std::uint64_t texels = registers ? 0 : e.texels() * static_cast<std::uint64_t>(bytes_per_texel(c.precision));
   std::uint64_t layers = texels;
@@ -282,7 +282,7 @@ std::vector<OptionSpec> flag_options() {
            "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
            "fused, each invocation walking down a column with the layers in registers (buffer scale 1, f32 or "
            "f16, adaptive off): the CPU reference's image bit for bit, for CPU devices (lavapipe stores and loads "
-           "a texel lane by lane); auto (the default): registers for the disc where it runs on a CPU device, "
+           "a texel lane by lane); auto (the default): registers where it runs on a CPU device, any aperture, "
            "else full",
            0, 0, 0, false, flag_layer_buffers(), {1, 2, 3}},
           {"band_rows",
@@ -391,7 +391,11 @@ void declare_flag(std::vector<Method>& methods) {
     return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12}};
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
-    if (!o.aperture.is_disc()) return flag_shape_gpu_memory(flag_config(o), o.aperture, w, h, ctx);
+    if (!o.aperture.is_disc()) {  // the layers as the device runs them (no device: the full buffer)
+      FilterOptions as_run = o;
+      as_run.values["layer_buffer"] = static_cast<double>(flag_layer_buffering(o, ctx ? &ctx->info() : nullptr));
+      return flag_shape_gpu_memory(flag_config(as_run), o.aperture, w, h, ctx);
+    }
     return flag_gpu_memory(o, w, h, ctx);
   };
   m.cpu_memory_bytes = flag_cpu_memory_bytes;

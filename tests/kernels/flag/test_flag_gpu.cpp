@@ -239,8 +239,8 @@ TEST(FlagRegisters, F16LayersRoundAsTheCpuReferenceAtTheFormatsEdges) {
   }
 }
 
-// auto runs registers where it can on a CPU device (lavapipe), the full buffer for what registers does
-// not run or polygons, and the full buffer where no device is named (the models' reference); an explicit
+// auto runs registers where it can on a CPU device (lavapipe), any aperture, the full buffer for what
+// registers does not run, and the full buffer where no device is named (the models' reference); an explicit
 // registers it cannot run is refused with the reason.
 TEST(FlagRegisters, AutoChoosesByDeviceAndOptions) {
   const GatherPattern pattern{41, 2};
@@ -255,7 +255,11 @@ TEST(FlagRegisters, AutoChoosesByDeviceAndOptions) {
   reduced.buffer_scale = 2;
   adaptive.values["adaptive"] = 1;
   shape.aperture = parse_aperture("blades6");
-  EXPECT_EQ(flag_layer_buffering(shape, &device), FlagLayerBuffer::full);  // polygons: registers when asked
+  // Polygons as the disc, and their memory model with them: no layer buffer where registers run.
+  EXPECT_EQ(flag_layer_buffering(shape, &device), runs ? FlagLayerBuffer::registers : FlagLayerBuffer::full);
+  vk::Context ctx;
+  EXPECT_EQ(find_method("flag").gpu_memory(shape, 800, 600, &ctx).details["layer_buffer_bytes"] == 0, runs);
+  EXPECT_GT(find_method("flag").gpu_memory(shape, 800, 600, nullptr).details["layer_buffer_bytes"], 0);
   for (FilterOptions* other : {&bracketed, &reduced, &adaptive}) {
     EXPECT_EQ(flag_layer_buffering(*other, &device), FlagLayerBuffer::full);
     other->values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
@@ -270,7 +274,6 @@ TEST(FlagRegisters, AutoChoosesByDeviceAndOptions) {
     ASSERT_EQ(work.size(), 1u);
     EXPECT_EQ(work[0].pass, "fused");
     EXPECT_EQ(work[0].taps, 2.0 * 800 * 600 * pattern.size_n);
-    vk::Context ctx;
     EXPECT_EQ(flag.gpu_memory(o, 800, 600, &ctx).bytes, 0u);
   }
   EXPECT_EQ(flag.work(o, 800, 600).size(), 2u);  // no device: horizontal and vertical

@@ -59,6 +59,14 @@ double largest(const Image& image) {
   return m;
 }
 
+// FLAG's defaults through its 3D buffer (layer_buffer = full), whose passes and tables most of these
+// tests check; auto runs registers on lavapipe (RegistersEqualTheCpuReferenceBitForBit checks those).
+FilterOptions buffer_defaults(const GatherPattern& pattern) {
+  FilterOptions o = find_method("flag").defaults(pattern);
+  o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::full);
+  return o;
+}
+
 // The scene's lens drawing `aperture`, fitted so that the largest CoC is `reach` times the pattern's
 // largest radius (beyond 1: radii clamped at the pattern's, so every area occurs).
 Lens shape_lens(const Scene& s, const GatherPattern& pattern, const Aperture& aperture, double reach = 1.2) {
@@ -133,7 +141,7 @@ TEST(FlagShape, ConservesEnergyForEveryShape) {
 // naming the option.
 TEST(FlagShape, DeclaresItsScope) {
   const Method& flag = find_method("flag");
-  FilterOptions o = flag.defaults({9, 2});
+  FilterOptions o = buffer_defaults({9, 2});
   o.aperture = parse_aperture("blades5");
   EXPECT_EQ(aperture_unsupported(flag, o), "");
   FilterOptions streamed = o;
@@ -177,7 +185,7 @@ TEST(FlagShape, AutoBinsAreScanWhereItWasMeasuredFasterOnCpuDevices) {
   const Method& flag = find_method("flag");
   for (const auto& [name, n, table] : {std::tuple{"blades6", 11, "chords"}, std::tuple{"blades6", 13, "row sections"},
                                        std::tuple{"blades5", 5, "chords"}, std::tuple{"blades5", 7, "row sections"}}) {
-    FilterOptions o = flag.defaults({n, 2});
+    FilterOptions o = buffer_defaults({n, 2});
     o.aperture = parse_aperture(name);
     EXPECT_EQ(flag.gpu_memory(o, 64, 48, nullptr).details["horizontal_table"], table) << name << " N " << n;
   }
@@ -316,13 +324,13 @@ TEST(FlagShape, ScanRefusesBadInput) {
 // chord table (indexed, masked) or the row sections (scan).
 TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
   const Method& flag = find_method("flag");
-  FilterOptions hexagon = flag.defaults({41, 1}), pentagon = hexagon;
+  FilterOptions hexagon = buffer_defaults({41, 1}), pentagon = hexagon;
   hexagon.aperture = parse_aperture("blades6");
   pentagon.aperture = parse_aperture("blades5");
   const std::uint64_t texels = 1920ull * 1080 * 8;
   EXPECT_EQ(flag.gpu_memory(hexagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 21);
   EXPECT_EQ(flag.gpu_memory(pentagon, 1920, 1080, nullptr).details["layer_buffer_bytes"], texels * 41);
-  EXPECT_EQ(flag.gpu_memory(flag.defaults({41, 1}), 1920, 1080, nullptr).details["texel_bytes"], texels * 21);
+  EXPECT_EQ(flag.gpu_memory(buffer_defaults({41, 1}), 1920, 1080, nullptr).details["texel_bytes"], texels * 21);
   FilterOptions scan = pentagon, indexed = pentagon;
   scan.values["horizontal_bins"] = 3;
   indexed.values["horizontal_bins"] = 1;
@@ -335,7 +343,7 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
   const Scene s = make_scene("hoops", 61, 45);
   for (const char* name : {"blades5", "blades6"})
     for (double bins : {1.0, 3.0}) {  // indexed, scan
-      FilterOptions o = flag.defaults({9, 2});
+      FilterOptions o = buffer_defaults({9, 2});
       o.aperture = parse_aperture(name);
       o.values["horizontal_bins"] = bins;
       Lens lens = s.lens;
@@ -368,7 +376,7 @@ TEST(FlagShape, GpuMatchesCpuReference) {
           if (block == 1.0 && std::string(precision) != "f32") continue;
           SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n) + " bins " +
                        flag_horizontal_bins()[std::size_t(bins)]);
-          FilterOptions o = flag.defaults(pattern);
+          FilterOptions o = buffer_defaults(pattern);
           o.precision = precision;
           o.aperture = parse_aperture(name);
           o.values["horizontal_block"] = block;
@@ -399,7 +407,7 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
         for (const auto bins : {FlagHorizontalBins::indexed, FlagHorizontalBins::masked}) {
           SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n) + " k " +
                        std::to_string(pattern.spacing_px) + " " + flag_horizontal_bins()[std::size_t(bins)]);
-          FilterOptions o = flag.defaults(pattern);
+          FilterOptions o = buffer_defaults(pattern);
           o.precision = precision;
           o.aperture = parse_aperture(name);
           o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
@@ -414,7 +422,7 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
           EXPECT_EQ(passes[2].pass, "fused");
           EXPECT_TRUE(test::same_bits(gpu, cpu));
         }
-  FilterOptions o = flag.defaults({41, 2});
+  FilterOptions o = buffer_defaults({41, 2});
   o.aperture = parse_aperture("blades5");
   o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
   EXPECT_EQ(flag.gpu_memory(o, 800, 600, nullptr).details["layer_buffer_bytes"], 0);
@@ -424,9 +432,6 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
   r11.precision = "r11g11b10f";
   const Lens lens = shape_lens(s, r11.pattern, r11.aperture);
   EXPECT_THROW(run_gpu(context(), flag, s.color, s.depth_m, lens, r11), std::invalid_argument);
-  FilterOptions polygon = flag.defaults({41, 2});
-  polygon.aperture = o.aperture;
-  EXPECT_EQ(flag_layer_buffering(polygon, &context().info()), FlagLayerBuffer::full);  // auto: the 3D buffer
 }
 
 // Masked bins (a compare per bin instead of an indexed add) add the same values to the same bins: the
@@ -440,7 +445,7 @@ TEST(FlagShape, MaskedBinsMatchIndexedBitForBit) {
       const Lens lens = shape_lens(s, pattern, parse_aperture(name));
       gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
       vk::TimestampQueries timer(context(), 16);
-      FilterOptions o = flag.defaults(pattern);
+      FilterOptions o = buffer_defaults(pattern);
       o.precision = "f32";
       o.aperture = lens.aperture;
       o.values["horizontal_bins"] = 1;  // indexed
@@ -466,7 +471,7 @@ TEST(FlagShape, StreamedLayersMatchTheFullBufferBitForBit) {
   for (const char* name : {"blades5", "blades6"})
     for (const auto& [precision, bins] : {std::pair{"f32", 0.0}, std::pair{"f16", 0.0}, std::pair{"f32", 3.0}}) {
       SCOPED_TRACE(std::string(name) + " " + precision + " bins " + flag_horizontal_bins()[std::size_t(bins)]);
-      FilterOptions o = flag.defaults(pattern);
+      FilterOptions o = buffer_defaults(pattern);
       o.precision = precision;
       o.aperture = parse_aperture(name);
       o.values["horizontal_bins"] = bins;
@@ -513,7 +518,7 @@ Image scan_mirror(gpu::GpuFrame& frame, const Image& color, const Aperture& aper
 // radii clamped at the pattern's, every area).
 void expect_scan_equals_its_mirror(const Scene& s, const GatherPattern& pattern, const char* aperture, double reach) {
   const Method& flag = find_method("flag");
-  FilterOptions o = flag.defaults(pattern);
+  FilterOptions o = buffer_defaults(pattern);
   o.precision = "f32";
   o.aperture = parse_aperture(aperture);
   o.values["horizontal_bins"] = 3;  // scan
