@@ -177,7 +177,7 @@ FlagLayerBuffer flag_layer_buffering(const FilterOptions& options, const vk::Dev
   const auto chosen = options.choice<FlagLayerBuffer>("layer_buffer");
   if (chosen != FlagLayerBuffer::automatic) return chosen;
   // Every aperture: polygons too, measured faster than their buffer and its scan at N = 9-153, halved or
-  // both halves, f16 and f32 (results/README.md, "Layers in registers").
+  // both halves, f16 and f32 (results/README.md, "polygons in registers by default").
   const bool runs_registers = device && device->is_software() &&
                               device->has_subgroup_operations(kFlagScanSubgroupOperations) &&
                               flag_registers_unsupported(options).empty();

@@ -191,6 +191,13 @@ FlagShapeSums cpu_shape_sums(const FlagConfig& c, const FlagShapeTable& table) {
              : FlagShapeSums::chords;
 }
 
+// The options with layer_buffer as `device` runs it (Method::on_device; device null: the full buffer).
+FilterOptions flag_layers_as_run(const FilterOptions& o, const vk::DeviceInfo* device) {
+  FilterOptions as_run = o;  // the enumerators are in the order of the option's choices
+  as_run.values["layer_buffer"] = static_cast<double>(flag_layer_buffering(o, device));
+  return as_run;
+}
+
 // A non-disc aperture (flag_shape.hpp): the layers (N unless the shape is mirror-symmetric; streamed:
 // the ring's rows) as the driver allocates them, the shape-weighted input (vec4 a pixel), naive's
 // sorted gauges and the horizontal pass's table (chords, or row sections for the scan).
@@ -359,11 +366,7 @@ void declare_flag(std::vector<Method>& methods) {
   m.make_gpu = [](gpu::GpuFrame& frame, const FilterOptions& o) {
     return o.aperture.is_disc() ? make_flag_gpu(frame, o) : make_flag_shape_gpu(frame, o);
   };
-  m.on_device = [](const FilterOptions& o, const vk::DeviceInfo* device) {
-    FilterOptions as_run = o;  // the enumerators are in the order of the option's choices
-    as_run.values["layer_buffer"] = static_cast<double>(flag_layer_buffering(o, device));
-    return as_run;
-  };
+  m.on_device = flag_layers_as_run;
   m.work = [](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
     if (o.aperture.is_disc()) return flag_work(c, w, h);
@@ -391,11 +394,9 @@ void declare_flag(std::vector<Method>& methods) {
     return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12}};
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
-    if (!o.aperture.is_disc()) {  // the layers as the device runs them (no device: the full buffer)
-      FilterOptions as_run = o;
-      as_run.values["layer_buffer"] = static_cast<double>(flag_layer_buffering(o, ctx ? &ctx->info() : nullptr));
-      return flag_shape_gpu_memory(flag_config(as_run), o.aperture, w, h, ctx);
-    }
+    if (!o.aperture.is_disc())  // the layers as the device runs them (no device: the full buffer)
+      return flag_shape_gpu_memory(flag_config(flag_layers_as_run(o, ctx ? &ctx->info() : nullptr)), o.aperture, w, h,
+                                   ctx);
     return flag_gpu_memory(o, w, h, ctx);
   };
   m.cpu_memory_bytes = flag_cpu_memory_bytes;

@@ -407,7 +407,7 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
         for (const auto bins : {FlagHorizontalBins::indexed, FlagHorizontalBins::masked}) {
           SCOPED_TRACE(std::string(name) + " " + precision + " N " + std::to_string(pattern.size_n) + " k " +
                        std::to_string(pattern.spacing_px) + " " + flag_horizontal_bins()[std::size_t(bins)]);
-          FilterOptions o = buffer_defaults(pattern);
+          FilterOptions o = flag.defaults(pattern);
           o.precision = precision;
           o.aperture = parse_aperture(name);
           o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
@@ -422,7 +422,7 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
           EXPECT_EQ(passes[2].pass, "fused");
           EXPECT_TRUE(test::same_bits(gpu, cpu));
         }
-  FilterOptions o = buffer_defaults({41, 2});
+  FilterOptions o = flag.defaults({41, 2});
   o.aperture = parse_aperture("blades5");
   o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
   EXPECT_EQ(flag.gpu_memory(o, 800, 600, nullptr).details["layer_buffer_bytes"], 0);
