@@ -24,12 +24,21 @@ from matplotlib.ticker import NullLocator, ScalarFormatter
 PAPER = ("naive", "flag")
 
 
+def curve_point(doc, series, backend):
+    """A point of the curve: its method, backend, precision and options off their defaults (the series'
+    variant, less the precision figure9 adds where a run holds several)."""
+    options = series.get("variant", "").split("/precision:")[0]
+    return next(p for p in doc["points"] if p["method"] == series["method"] and p["backend"] == backend
+                and p["precision"] == series.get("precision", p["precision"]) and p.get("variant", "") == options)
+
+
 def label(series, point):
     fit = series["fits"].get("larger_half") or series["fits"].get("all_sizes")
-    text = f"{series['method']} ({point['precision']})"
+    name = series["method"] + point.get("variant", "")
+    text = f"{name} ({point['precision']})"
     as_run = point.get("work", {}).get("options_as_run", {})
     if "layer_buffer" in as_run:  # what auto became on this device (FLAG: registers on lavapipe)
-        text = f"{series['method']} ({point['precision']}, layers: {as_run['layer_buffer']})"
+        text = f"{name} ({point['precision']}, layers: {as_run['layer_buffer']})"
     if fit:
         text += f"  ~N^{fit['exponent']:.2f} [{fit['low']:.2f}, {fit['high']:.2f}]"
     unclipped = series["fits"].get("larger_half_unclipped")
@@ -39,15 +48,19 @@ def label(series, point):
 
 
 def draw_curves(ax, doc, backend, methods, colours):
+    """Each curve in its method's colour; a method's further variants and precisions dotted and dash-dotted
+    (dashed lines are the CPU baselines)."""
+    drawn = {}
     for s in doc["series"]:
         if s["backend"] != backend or s["method"] not in methods:
             continue
-        point = next(p for p in doc["points"] if p["method"] == s["method"] and p["backend"] == backend)
+        point = curve_point(doc, s, backend)
+        nth = drawn[s["method"]] = drawn.get(s["method"], -1) + 1
         med = s["median_ms"]
         lo = [m - low for m, low in zip(med, s["median_ms_low"])]
         hi = [high - m for m, high in zip(med, s["median_ms_high"])]
-        ax.errorbar(s["N"], med, yerr=[lo, hi], color=colours[s["method"]], marker="o", ms=4, capsize=3,
-                    label=label(s, point))
+        ax.errorbar(s["N"], med, yerr=[lo, hi], color=colours[s["method"]], marker="osD^v"[nth % 5], ms=4, capsize=3,
+                    ls=("-", ":", "-.")[nth % 3], label=label(s, point))
 
 
 def draw_baselines(ax, doc, backend):

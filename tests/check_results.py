@@ -135,15 +135,30 @@ def exponent_interval(curve, rounds):
     return median_interval(slopes) if slopes else None
 
 
+def figure_variant(d):
+    """p -> the curve figure9 draws point p on: its options off their defaults (its variant), and its precision
+    where the run holds several of its method's, but for the plain curve's (the series whose variant names no
+    precision: the method's default, or the first of its list the run holds; figure9.cpp, figure_variant)."""
+    held = {}
+    for p in d["points"]:
+        held.setdefault(p["method"], set()).add(p["precision"])
+    plain = {s["method"]: s.get("precision") for s in d["series"] if "/precision:" not in s.get("variant", "")}
+
+    def variant(p):
+        several = len(held[p["method"]]) > 1 and p["precision"] != plain.get(p["method"])
+        return p.get("variant", "") + ("/precision:" + p["precision"] if several else "")
+    return variant
+
+
 def headline_figures(d, lead, rounds):
     """The run's headline figures from `rounds` alone, by name: naive/FLAG at each N and backend (a ratio, judged in
     logs) and each curve's larger-half exponent: {name: (backend, is_ratio, (estimate, low, high))}."""
     software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
     field = lambda backend: "samples_cpu_ms" if lead and (backend == "cpu" or software) else "samples_ms"
     by_round = lambda p: {r: ms for r, ms in zip(p["sample_rounds"], p[field(p["backend"])]) if r in rounds}
-    out, curves = {}, {}
+    out, curves, variant = {}, {}, figure_variant(d)
     for p in d["points"]:
-        curves.setdefault((p["method"], p.get("variant", ""), p["backend"]), []).append((p["N"], by_round(p)))
+        curves.setdefault((p["method"], variant(p), p["backend"]), []).append((p["N"], by_round(p)))
     for (method, variant, backend), curve in curves.items():
         if len(curve) - len(curve) // 2 >= 2 and (e := exponent_interval(curve, rounds)):
             out[f"{method}{variant} {backend} larger_half"] = (backend, False, e)
@@ -165,7 +180,8 @@ def baseline_figures(d, lead, rounds):
     software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
     field = "samples_cpu_ms" if lead and software else "samples_ms"
     by_round = lambda p: {r: ms for r, ms in zip(p["sample_rounds"], p[field]) if r in rounds}
-    flag = {p["N"]: by_round(p) for p in d["points"] if p["method"] == "flag" and not p.get("variant") and p["backend"] == "gpu"}
+    variant = figure_variant(d)
+    flag = {p["N"]: by_round(p) for p in d["points"] if p["method"] == "flag" and not variant(p) and p["backend"] == "gpu"}
     out = {}
     for b in d.get("baselines", []):
         base = by_round(b)
@@ -230,7 +246,8 @@ def figure9(d):
     by the spread of the machine's earlier runs, measurement.run_to_run, where that is wider)."""
     software = (d["context"].get("device") or {}).get("type", "cpu") == "cpu"
     field = {"process CPU time": "samples_cpu_ms", "wall-clock time": "samples_ms"}
-    points = {(p["method"], p["backend"], p["N"]): p for p in d["points"] if not p.get("variant")}
+    variant = figure_variant(d)
+    points = {(p["method"], p["backend"], p["N"]): p for p in d["points"] if not variant(p)}
     spread = d["measurement"].get("run_to_run", {})
     checked = widened = between = 0
     for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
@@ -310,7 +327,8 @@ def check_baselines(d, field, software):
     assert sorted(set(measured) | set(skipped)) == gpu_n, (sorted(measured), sorted(skipped), gpu_n)
     for b in skipped.values():
         assert b["reason"], b
-    flag_n = {p["N"] for p in d["points"] if p["method"] == "flag" and not p.get("variant") and p["backend"] == "gpu"}
+    variant = figure_variant(d)
+    flag_n = {p["N"] for p in d["points"] if p["method"] == "flag" and not variant(p) and p["backend"] == "gpu"}
     checked = 0
     for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
         time = "process CPU time" if lead and software else "wall-clock time"

@@ -9,6 +9,7 @@
 // Where the CPU does the work (the CPU references; the GPU backend on lavapipe) the figures are in
 // process CPU time, as `ab` compares there; on a real GPU in wall-clock time (cpu_time_leads).
 #include <algorithm>
+#include <map>
 #include <set>
 
 #include <fmt/format.h>
@@ -65,16 +66,45 @@ struct RoundPoint {
   bool cpu_time_leads = false;                  // its figures are in cpu_ms (cpu_time_leads())
   RoundValues wall_ms, cpu_ms;                   // the frame's wall-clock time; the process CPU time per frame
   std::map<std::string, RoundValues> pass_ms;   // GPU: per pass (Vulkan timestamps)
+  std::string precision;                        // of its intermediates ("" for a baseline)
 };
+
+using PrecisionsHeld = std::map<std::string, std::set<std::string>>;  // each method's precisions in a run
+
+// A run over several precisions of a method draws each as a curve of its own: the precision joins the
+// point's variant ("/precision:f32"), but for the one the method lists first among them (its default
+// where run), which keeps the plain variant, the curve naive / FLAG pairs. Without it the curves mixed
+// the precisions point by point (and two sizes gave a larger half of one N, which no fit takes).
+std::string figure_variant(const std::string& method, const std::string& precision, const std::string& variant,
+                           const PrecisionsHeld& held) {
+  const auto run = held.find(method);
+  if (run == held.end() || run->second.size() < 2) return variant;
+  std::string plain = *run->second.begin();
+  for (const Method* m : known_methods())
+    if (m->name == method)
+      for (auto x = m->precisions.rbegin(); x != m->precisions.rend(); ++x)
+        if (run->second.count(*x)) plain = *x;
+  return precision == plain ? variant : variant + "/precision:" + precision;
+}
+
+PrecisionsHeld precisions_held(const std::vector<SweepPoint>& points) {
+  PrecisionsHeld held;
+  for (const auto& p : points) held[p.method->name].insert(p.options.precision);
+  return held;
+}
 
 // A results document's points, then its baselines (figure9's --cpu-baseline).
 std::vector<RoundPoint> round_points(const nlohmann::json& doc, const nlohmann::json& device) {
+  PrecisionsHeld held;
+  for (const auto& p : doc["points"]) held[p["method"]].insert(p["precision"].get<std::string>());
   std::vector<RoundPoint> out;
   for (const auto& p : doc["points"]) {
-    RoundPoint r{p["method"], p.value("variant", ""), p["backend"], p["N"].get<int>(), false,
+    RoundPoint r{p["method"], figure_variant(p["method"], p["precision"], p.value("variant", ""), held), p["backend"],
+                 p["N"].get<int>(), false,
                  cpu_time_leads(p["backend"], device), round_values(p), round_values(p, "samples_cpu_ms"), {}};
     for (const auto& [pass, values] : p["samples_pass_ms"].items())
       for (std::size_t s = 0; s < values.size(); ++s) r.pass_ms[pass][p["sample_rounds"][s].get<int>()] = values[s].get<double>();
+    r.precision = p["precision"];
     out.push_back(std::move(r));
   }
   for (const auto& b : doc.value("baselines", nlohmann::json::array()))
@@ -85,16 +115,20 @@ std::vector<RoundPoint> round_points(const nlohmann::json& doc, const nlohmann::
 
 std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, const runner::RunRecord& record,
                                      const nlohmann::json& device) {
+  const PrecisionsHeld held = precisions_held(points);
   std::vector<RoundPoint> out;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const runner::PointRecord& rec = record.points[i];
     if (rec.samples.empty() || !rec.skipped.empty()) continue;
-    RoundPoint r{points[i].method->name, points[i].variant, points[i].backend, points[i].options.pattern.size_n,
+    const SweepPoint& p = points[i];
+    RoundPoint r{p.method->name, figure_variant(p.method->name, p.options.precision, p.variant, held), p.backend,
+                 p.options.pattern.size_n,
                  false, cpu_time_leads(points[i].backend, device), {}, {}, {}};
     for (std::size_t s = 0; s < rec.samples.size(); ++s) {
       r.wall_ms[rec.sample_round[s]] = rec.samples[s].frame_ms;
       r.cpu_ms[rec.sample_round[s]] = rec.samples[s].cpu_ms;
     }
+    r.precision = p.options.precision;
     out.push_back(std::move(r));
   }
   return out;
@@ -335,6 +369,7 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
     std::sort(pts.begin(), pts.end(), [](auto* a, auto* b) { return a->n < b->n; });
     nlohmann::json curve = curve_json(pts, metric, headlines_only);
     curve.update({{"backend", pts.front()->backend}, {"time", time_of(*pts.front(), metric)}});
+    if (!pts.front()->precision.empty()) curve["precision"] = pts.front()->precision;  // one a curve
     return curve;
   };
   std::set<std::string> variants;
@@ -797,10 +832,12 @@ void figure9(Figure9Options& o) {
         figures(round_points(points, record, context.value("device", nlohmann::json())), Metric::lead, target_ratio,
                 target_exponent, true, record.round_process)
             .needed;
+    const PrecisionsHeld held = precisions_held(points);
     std::vector<bool> out;
     std::set<int> gpu_needed;
     for (const auto& p : points) {
-      out.push_back(needed.count(point_key(p.method->name, p.variant, p.backend, p.options.pattern.size_n)) > 0);
+      const std::string variant = figure_variant(p.method->name, p.options.precision, p.variant, held);
+      out.push_back(needed.count(point_key(p.method->name, variant, p.backend, p.options.pattern.size_n)) > 0);
       if (out.back() && p.backend == "gpu") gpu_needed.insert(p.options.pattern.size_n);
     }
     for (int n : baseline_n) out.push_back(gpu_needed.count(n) > 0);
