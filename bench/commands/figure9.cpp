@@ -123,7 +123,7 @@ std::vector<RoundPoint> round_points(const std::vector<SweepPoint>& points, cons
     const SweepPoint& p = points[i];
     RoundPoint r{p.method->name, figure_variant(p.method->name, p.options.precision, p.variant, held), p.backend,
                  p.options.pattern.size_n,
-                 false, cpu_time_leads(points[i].backend, device), {}, {}, {}};
+                 false, cpu_time_leads(p.backend, device), {}, {}, {}};
     for (std::size_t s = 0; s < rec.samples.size(); ++s) {
       r.wall_ms[rec.sample_round[s]] = rec.samples[s].frame_ms;
       r.cpu_ms[rec.sample_round[s]] = rec.samples[s].cpu_ms;
