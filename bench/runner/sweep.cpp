@@ -859,8 +859,21 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
              ctx ? ctx->info().name : "none (CPU only)", context["lp_num_threads"].get<std::string>(), s.policy.budget_s,
              s.processes > 1 ? fmt::format(" over {} processes one after another", s.processes)
              : s.process_index > 0 ? fmt::format(" (process {}, --process)", s.process_index) : "");
-  for (std::size_t i = 0; i < names.size(); ++i)
-    if (!skip[i].empty()) fmt::print("  skipped {}: {}\n", names[i], skip[i]);
+  // Each reason once, then the points it skips (the results' `skipped` list has each with its reason):
+  // an option swept over choices that some precisions or scales cannot run skips a family of points.
+  std::vector<std::pair<std::string, std::vector<std::string>>> skipped_by_reason;  // in order of appearance
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (skip[i].empty()) continue;
+    auto it = std::find_if(skipped_by_reason.begin(), skipped_by_reason.end(),
+                           [&](const auto& r) { return r.first == skip[i]; });
+    if (it == skipped_by_reason.end()) it = skipped_by_reason.insert(it, {skip[i], {}});
+    it->second.push_back(names[i]);
+  }
+  for (const auto& [reason, ids] : skipped_by_reason)
+    if (ids.size() == 1)
+      fmt::print("  skipped {}: {}\n", ids.front(), reason);
+    else
+      fmt::print("  skipped {} points: {}\n    {}\n", ids.size(), reason, fmt::join(ids, "\n    "));
 
   runner::RunRecord record;
   {
