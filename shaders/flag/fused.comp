@@ -46,8 +46,8 @@ layout(std430, binding = 0) readonly buffer Packed { vec4 packed_input[]; };
 layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
 
 // A layer as the buffer would hold it. f16: each channel rounded to the nearest, ties to even, as
-// Imath::half rounds in the CPU reference, in vector arithmetic: lavapipe converts packHalf2x16 and
-// unpackHalf2x16 lane by lane (a fifth of the frame at N = 81).
+// Imath::half rounds in the CPU reference, in vector arithmetic: packHalf2x16 and back cost a fifth of
+// the frame at N = 81 on lavapipe (its unpack alone is cheap, results/README.md).
 vec3 stored(vec3 layer) {
 #if QUANTIZE_F16
   const uvec3 bits = floatBitsToUint(layer);
