@@ -780,7 +780,15 @@ void figure9(Figure9Options& o) {
   axes.sweep_choices = o.sweep_choices;
   axes.apertures = o.axes.aperture_shapes();  // one: the figures pair points by method and N alone
   std::vector<int> sizes;
-  for (const auto& p : axes.patterns) sizes.push_back(p.size_n);
+  for (const auto& p : axes.patterns) {
+    // The figures pair points and fit curves by N (the paper's axis): two spacings of one N would share a
+    // point of every curve.
+    if (std::find(sizes.begin(), sizes.end(), p.size_n) != sizes.end())
+      throw std::invalid_argument(fmt::format("--sizes: N = {} is given with two spacings; figure9 draws frame time "
+                                              "against N, so give each N once (run other spacings apart)",
+                                              p.size_n));
+    sizes.push_back(p.size_n);
+  }
   const double target_ratio = o.target_ratio_pct / 100, target_exponent = o.target_exponent;
 
   SweepSettings s = o.sweep.settings("figure9", "plot_figure9.py");
