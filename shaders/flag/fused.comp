@@ -5,7 +5,8 @@
 // down the rows of one row phase. At each row it bins the row's samples for its columns and sums the
 // bins into layers (flag_bins and flag_layers of layers.glsl, or horizontal_shape.comp's chords with
 // SHAPE, in their order of additions), then adds layer |j| to the running sum of the output row j rows
-// away; the output row n rows above is then complete and written, and the sums move up one row. The
+// away, moving the sums up one row in the same pass (a pass of its own spilled at N = 153: 0.74 of the
+// frame without it); the output row n rows above is then complete and written. The
 // sums and layers are indexed by constants only (the loops are unrolled), which lavapipe keeps in
 // vector registers and its stack, where the full buffer's passes store and load every texel lane by
 // lane (most of their frame, results/README.md "Layers in registers"). The vertical sums add the same
@@ -77,14 +78,14 @@ void main() {
   // The subgroup's columns: first .. first + batch.x - 1 (all 8 on lavapipe with AVX2, 4 without).
   const ivec2 batch = sample_batch();
   const int first = c - batch.y, last = first + batch.x - 1;
-  // sums[d]: output row t - n + d, once row t is added (to which row t is row j = n - d below).
-  vec3 sums[SUMS];
+  // sums[d]: output row t + 1 - n + d with rows .. t added, before row t + 1 (to which row t + 1 is row
+  // j = n - d below). The row adds its layers and moves the sums up one row in one pass: output row t - n
+  // is then complete and written.
+  vec3 sums[SUMS];  // sums[SUMS - 1] stays 0: the row below the last in flight
   [[unroll]] for (int d = 0; d < SUMS; ++d) sums[d] = vec3(0.0);
-  // Output row t - n is complete once row t is added: written, and the sums move up one row.
-#define WRITE_AND_MOVE_UP(t)                                                                                \
-  if ((t) >= n && x < params.width_px) result[index_of(ivec2(x, phase_y + ((t) - n) * k))] = vec4(sums[0], 1.0); \
-  [[unroll]] for (int d = 0; d + 1 < SUMS; ++d) sums[d] = sums[d + 1];                                      \
-  sums[SUMS - 1] = vec3(0.0);
+#define WRITE(t, value) \
+  if ((t) >= n && x < params.width_px) result[index_of(ivec2(x, phase_y + ((t) - n) * k))] = vec4(value, 1.0);
+#define LAYER_FOR(d) layer[BOTH_HALVES ? (d) : abs(n - (d))]
   for (int t = 0; t < rows; ++t) {
     const int y = phase_y + t * k;
     vec3 bins[LAYERS];
@@ -150,10 +151,12 @@ void main() {
       running += bins[z];
       layer[z] = stored(running);
     }
-    [[unroll]] for (int d = 0; d < SUMS; ++d) sums[d] += layer[BOTH_HALVES ? d : abs(n - d)];
-    WRITE_AND_MOVE_UP(t)
+    // The same additions in the same order as adding all, then moving up.
+    WRITE(t, sums[0] + LAYER_FOR(0))
+    [[unroll]] for (int d = 0; d + 1 < SUMS; ++d) sums[d] = sums[d + 1] + LAYER_FOR(d + 1);
   }
   for (int t = rows; t < rows + n; ++t) {  // rows past the frame add nothing
-    WRITE_AND_MOVE_UP(t)
+    WRITE(t, sums[0])
+    [[unroll]] for (int d = 0; d + 1 < SUMS; ++d) sums[d] = sums[d + 1];
   }
 }

@@ -169,14 +169,16 @@ TEST(FlagStreamed, EqualsTheFullBufferBitForBit) {
 
 // No layer buffer (layer_buffer = registers, shaders/flag/fused.comp): the CPU reference's image bit for
 // bit, f32 and f16, and f32 the full buffer's with indexed bins (the same layer values summed in the same
-// order); at frame edges, partial workgroups, k = 3 and a pattern wider than the frame. It allocates no
+// order); at frame edges, partial workgroups, k = 3, a pattern wider than the frame, and N = 1 and 3 (one
+// and three output rows in flight). It allocates no
 // intermediates and stamps one pass.
 TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
   struct Frame {
     int width_px, height_px;
     GatherPattern pattern;
   };
-  for (const Frame& f : {Frame{63, 46, {9, 2}}, Frame{63, 46, {7, 3}}, Frame{70, 52, {41, 2}}, Frame{16, 16, {41, 1}}}) {
+  for (const Frame& f : {Frame{63, 46, {9, 2}}, Frame{63, 46, {7, 3}}, Frame{70, 52, {41, 2}}, Frame{16, 16, {41, 1}},
+                         Frame{40, 30, {1, 1}}, Frame{40, 30, {3, 2}}}) {
     const Scene s = make_scene("hoops", f.width_px, f.height_px);
     const Lens lens = with_max_coc_radius(s.lens, s.depth_m, f.pattern.max_radius_px() * 1.2);
     gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, f.pattern);
