@@ -63,10 +63,9 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   return work;
 }
 
-MemoryUse flag_gpu_memory(const FilterOptions& o, int w, int h, vk::Context* ctx) {
-  const FlagConfig c = flag_config(o);
+MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
   MemoryUse use;
-  if (flag_layer_buffering(o, ctx ? &ctx->info() : nullptr) == FlagLayerBuffer::registers) {
+  if (c.layer_buffer == FlagLayerBuffer::registers) {  // as flag_layers_as_run resolves auto
     // No layer buffer: each invocation's N = 2 n + 1 running sums and a row's bins and layers (n + 1
     // each), 3 floats apiece, live in registers and the driver's stack, not in memory it allocates.
     use.from_driver = ctx != nullptr;
@@ -394,10 +393,9 @@ void declare_flag(std::vector<Method>& methods) {
     return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12}};
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
-    if (!o.aperture.is_disc())  // the layers as the device runs them (no device: the full buffer)
-      return flag_shape_gpu_memory(flag_config(flag_layers_as_run(o, ctx ? &ctx->info() : nullptr)), o.aperture, w, h,
-                                   ctx);
-    return flag_gpu_memory(o, w, h, ctx);
+    // The layers as the device runs them (no device: the full buffer).
+    const FlagConfig c = flag_config(flag_layers_as_run(o, ctx ? &ctx->info() : nullptr));
+    return o.aperture.is_disc() ? flag_gpu_memory(c, w, h, ctx) : flag_shape_gpu_memory(c, o.aperture, w, h, ctx);
   };
   m.cpu_memory_bytes = flag_cpu_memory_bytes;
   // Against the CPU emulation of the same format. Each output sums 2n+1 non-negative layer values,

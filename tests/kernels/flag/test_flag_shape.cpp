@@ -75,6 +75,19 @@ Lens shape_lens(const Scene& s, const GatherPattern& pattern, const Aperture& ap
   return lens;
 }
 
+// FLAG's CPU reference and GPU passes on `s` with options `o`, the lens drawing o.aperture.
+struct CpuAndGpu {
+  Image cpu, gpu;
+  std::vector<vk::PassTime> passes;
+};
+CpuAndGpu run_cpu_and_gpu(const Scene& s, const FilterOptions& o) {
+  const Method& flag = find_method("flag");
+  const Lens lens = shape_lens(s, o.pattern, o.aperture);
+  CpuAndGpu out{run_cpu(flag, s.color, s.depth_m, lens, o, 2), {}, {}};
+  out.gpu = run_gpu(context(), flag, s.color, s.depth_m, lens, o, &out.passes);
+  return out;
+}
+
 // FLAG by chords against naive's shape test on the same float gauges, every shape, f32 and the
 // per-value formats: each output sums non-negative layer values (N of them at most) whose own
 // rounding is at most 2^-11 (f16) or 2^-6 (r11g11b10f blue) of themselves, so |FLAG - naive| <= that
@@ -381,10 +394,7 @@ TEST(FlagShape, GpuMatchesCpuReference) {
           o.aperture = parse_aperture(name);
           o.values["horizontal_block"] = block;
           o.values["horizontal_bins"] = bins;
-          const Lens lens = shape_lens(s, pattern, o.aperture);
-          const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, o, 2);
-          std::vector<vk::PassTime> passes;
-          const Image gpu = run_gpu(context(), flag, s.color, s.depth_m, lens, o, &passes);
+          const auto [cpu, gpu, passes] = run_cpu_and_gpu(s, o);
           ASSERT_EQ(passes.size(), 4u);
           EXPECT_EQ(passes[1].pass, "shape_pack");
           double diff = 0;
@@ -413,10 +423,7 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
           o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
           o.values["horizontal_bins"] = static_cast<double>(bins);
           ASSERT_EQ(flag.unsupported(o, 63, 46), "");
-          const Lens lens = shape_lens(s, pattern, o.aperture);
-          const Image cpu = run_cpu(flag, s.color, s.depth_m, lens, o, 2);
-          std::vector<vk::PassTime> passes;
-          const Image gpu = run_gpu(context(), flag, s.color, s.depth_m, lens, o, &passes);
+          const auto [cpu, gpu, passes] = run_cpu_and_gpu(s, o);
           ASSERT_EQ(passes.size(), 3u);
           EXPECT_EQ(passes[1].pass, "shape_pack");
           EXPECT_EQ(passes[2].pass, "fused");
