@@ -65,6 +65,21 @@ vec3 stored(vec3 layer) {
 #endif
 }
 
+// Indexed bins: which of them this row has added to, a bit each (masked bins are registers, cleared).
+const int TOUCHED_WORDS = MASKED_BINS ? 1 : (LAYERS + 31) / 32;
+
+// What bin z held before this add: 0.0 at the row's first add to it, which it marks in `touched`. The
+// word is chosen by selects, not an index (a dynamic index would put `touched` in scratch memory).
+vec3 held(inout uint touched[TOUCHED_WORDS], vec3 bin, int z) {
+  bool first = false;
+  [[unroll]] for (int w = 0; w < TOUCHED_WORDS; ++w) {
+    const uint bit = z / 32 == w ? 1u << (z % 32) : 0u;
+    first = first || (touched[w] & bit) == 0u && bit != 0u;
+    touched[w] |= bit;
+  }
+  return first ? vec3(0.0) : bin;
+}
+
 void main() {
   const int n = HALF, k = SPACING;
   // Workgroup (b + blocks phase_x, phase_y): lattice columns 8 b .. 8 b + 7 of column phase phase_x.
@@ -86,10 +101,19 @@ void main() {
 #define WRITE(t, value) \
   if ((t) >= n && x < params.width_px) result[index_of(ivec2(x, phase_y + ((t) - n) * k))] = vec4(value, 1.0);
 #define LAYER_FOR(d) layer[BOTH_HALVES ? (d) : abs(n - (d))]
+  // Indexed bins live in lavapipe's scratch memory, where every store, even at a constant index, is one
+  // masked store per lane: clearing all of them every row took 12-17% of the frame at N = 57-153
+  // (results/README.md). They are cleared once; a row's first add to a bin takes 0.0 for what the bin
+  // held (the bit `touched` tracks, in registers): the same values added in the same order.
+  vec3 bins[LAYERS];
+  [[unroll]] for (int z = 0; z < LAYERS; ++z) bins[z] = vec3(0.0);
+  uint touched[TOUCHED_WORDS];
   for (int t = 0; t < rows; ++t) {
     const int y = phase_y + t * k;
-    vec3 bins[LAYERS];
-    [[unroll]] for (int z = 0; z < LAYERS; ++z) bins[z] = vec3(0.0);
+    if (MASKED_BINS) {
+      [[unroll]] for (int z = 0; z < LAYERS; ++z) bins[z] = vec3(0.0);
+    }
+    [[unroll]] for (int w = 0; w < TOUCHED_WORDS; ++w) touched[w] = 0u;
     // The subgroup's samples, lattice columns first - n .. last + n, left to right in batches.
     for (int s0 = first - n; s0 <= last + n; s0 += batch.x) {
       const int s = s0 + batch.y;
@@ -126,8 +150,12 @@ void main() {
           [[unroll]] for (int z = 0; z < LAYERS; ++z) bins[z] += z == far ? src : (z == past ? -src : vec3(-0.0));
         } else {
           // Without an event, 0.0 to or from bin 0: x + 0.0 and x - 0.0 are x (no bin holds -0.0).
-          bins[max(far, 0)] += far >= 0 ? src : vec3(0.0);
-          if (BOTH_HALVES) bins[max(past, 0)] -= past >= 0 ? src : vec3(0.0);
+          const int at = max(far, 0);
+          bins[at] = held(touched, bins[at], at) + (far >= 0 ? src : vec3(0.0));
+          if (BOTH_HALVES) {
+            const int below = max(past, 0);
+            bins[below] = held(touched, bins[below], below) - (past >= 0 ? src : vec3(0.0));
+          }
         }
 #else
         if (MASKED_BINS) {
@@ -140,7 +168,8 @@ void main() {
         } else {
           const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
           // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
-          bins[max(z, 0)] += z >= 0 ? src : vec3(0.0);
+          const int at = max(z, 0);
+          bins[at] = held(touched, bins[at], at) + (z >= 0 ? src : vec3(0.0));
         }
 #endif
       }
@@ -148,7 +177,7 @@ void main() {
     vec3 layer[LAYERS];
     vec3 running = vec3(0.0);
     [[unroll]] for (int z = LAYERS - 1; z >= 0; --z) {
-      running += bins[z];
+      running += MASKED_BINS || (touched[z / 32] & (1u << (z % 32))) != 0u ? bins[z] : vec3(0.0);
       layer[z] = stored(running);
     }
     // The same additions in the same order as adding all, then moving up.

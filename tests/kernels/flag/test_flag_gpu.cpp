@@ -170,8 +170,7 @@ TEST(FlagStreamed, EqualsTheFullBufferBitForBit) {
 // No layer buffer (layer_buffer = registers, shaders/flag/fused.comp): the CPU reference's image bit for
 // bit, f32 and f16, and f32 the full buffer's with indexed bins (the same layer values summed in the same
 // order); at frame edges, partial workgroups, k = 3, a pattern wider than the frame, and N = 1 and 3 (one
-// and three output rows in flight). It allocates no
-// intermediates and stamps one pass.
+// and three output rows in flight). It allocates no intermediates and stamps one pass.
 TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
   struct Frame {
     int width_px, height_px;
@@ -210,6 +209,23 @@ TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
       }
     }
   }
+}
+
+// Indexed bins past 32 layers: a row's first add to each bin is marked in a word of bits a 32 layers
+// (fused.comp clears the bins once, not every row); 65 layers use three words, every disc reaching all
+// of them. The CPU reference's image bit for bit.
+TEST(FlagRegisters, IndexedBinsOfManyLayersEqualTheCpuReference) {
+  const GatherPattern pattern{129, 1};
+  const Scene s = make_scene("hoops", 40, 30);
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  vk::TimestampQueries timer(context(), 16);
+  FilterOptions registers = options_for("flag", pattern, "f16");
+  registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+  registers.values["horizontal_bins"] = static_cast<double>(FlagHorizontalBins::indexed);
+  auto fused = find_method("flag").make_gpu(frame, registers);
+  EXPECT_EQ(gpu::run_frames(frame, *fused, timer).back().pass, "fused");
+  EXPECT_TRUE(same_bits(frame.read_output(), flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2)));
 }
 
 // The registers' f16 rounding (vector arithmetic, not packHalf2x16) at the format's edges, against

@@ -406,12 +406,14 @@ TEST(FlagShape, GpuMatchesCpuReference) {
 
 // layer_buffer = registers for a polygon (shaders/flag/fused.comp with SHAPE, asked for explicitly):
 // the CPU reference's image bit for bit (f32 and f16: the same chords and layer values, each rounded to
-// nearest, summed in the same order), halved shapes and both halves, indexed and masked bins; and no
-// layer buffer, one fused pass after shape_pack.
+// nearest, summed in the same order), halved shapes and both halves, indexed and masked bins (41 layers
+// of blades5 at N = 41: the indexed bins' row marks in a second word); and no layer buffer, one fused
+// pass after shape_pack.
 TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
   const Method& flag = find_method("flag");
   const Scene s = make_scene("hoops", 63, 46);
-  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}, GatherPattern{7, 3}})
+  for (const GatherPattern pattern :
+       {GatherPattern{9, 2}, GatherPattern{15, 1}, GatherPattern{7, 3}, GatherPattern{41, 1}})
     for (const char* name : {"blades5", "blades6", "blades7-rot15-curv0.3"})
       for (const char* precision : {"f32", "f16"})
         for (const auto bins : {FlagHorizontalBins::indexed, FlagHorizontalBins::masked}) {
