@@ -51,15 +51,17 @@ layout(std430, binding = 1) writeonly buffer Out { vec4 result[]; };
 // the frame at N = 81 on lavapipe (its unpack alone is cheap, results/README.md).
 vec3 stored(vec3 layer) {
 #if QUANTIZE_F16
+  // To f16's spacing at the layer's exponent e, 2^(e - 10), by adding and taking away 1.5 2^(e + 13),
+  // whose f32 spacing that is: to nearest, ties to even (its last bit is 0). e is clamped to [-14, 16]:
+  // below, f16's subnormals (multiples of 2^-24); past 65504 a result of 2^16 or more, which scaling by
+  // 2^112 and back makes infinite. Zero keeps the layer's sign. precise: no folding of either pair.
   const uvec3 bits = floatBitsToUint(layer);
-  // f16's normal range: 10 of the 23 fraction bits kept, ties to even (a carry into the exponent is the
-  // right result). Quiet NaNs stay NaN and infinities infinite.
-  vec3 rounded = uintBitsToFloat((bits + 0xfffu + ((bits >> 13) & 1u)) & ~0x1fffu);
-  // Below 2^-14, f16's subnormals: multiples of 2^-24 (both scalings exact).
-  rounded = mix(rounded, roundEven(layer * 16777216.0) * 5.9604644775390625e-08,
-                lessThan(abs(layer), vec3(6.103515625e-05)));
-  // Beyond f16's largest finite value, 65504: infinity of the layer's sign.
-  return mix(rounded, uintBitsToFloat((bits & 0x80000000u) | 0x7f800000u), greaterThan(abs(rounded), vec3(65504.0)));
+  const uvec3 exponent = clamp(bits & 0x7f800000u, uvec3(113u << 23), uvec3(143u << 23));  // 2^-14 .. 2^16
+  const vec3 magic = uintBitsToFloat(exponent + (13u << 23) + 0x400000u);                   // x 2^13 x 1.5
+  precise vec3 rounded = (layer + magic) - magic;
+  rounded = uintBitsToFloat(floatBitsToUint(rounded) | (bits & 0x80000000u));
+  precise vec3 limited = rounded * 5.192296858534828e+33 * 1.925929944387236e-34;
+  return limited;
 #else
   return layer;
 #endif
