@@ -262,9 +262,11 @@ std::vector<OptionSpec> flag_options() {
            "and adds it or -0.0 (O(N n) adds, no dynamically indexed array: lavapipe makes that a scalar load "
            "and store per lane); scan: per layer, interval sums by a prefix scan along row segments (O(N), "
            "each sample loaded once per 8 layers and handed on by subgroup shuffle; the same samples in another "
-           "order of additions; needs subgroup ballot and shuffle); auto: on CPU devices such as lavapipe masked "
-           "up to 12 layers (N = 23), scan beyond (other apertures: scan from 7 layers, else indexed); indexed "
-           "on GPUs. indexed and masked give the same image bit for bit, scan to f32 rounding",
+           "order of additions; needs subgroup ballot and shuffle); auto: on CPU devices such as lavapipe, with "
+           "the layers in registers (layer_buffer auto there), masked up to 24 layers (N = 47), indexed beyond "
+           "(scan runs as indexed there); with the 3D buffer masked up to 12 layers (N = 23), scan beyond "
+           "(other apertures: scan from 7 layers, else indexed); indexed on GPUs. indexed and masked give the "
+           "same image bit for bit, scan to f32 rounding",
            0, 0, 0, false, flag_horizontal_bins()},
           {"vertical_order",
            "flag: the order the GPU vertical pass's workgroups take their tiles. rows: row-major; columns: down "
