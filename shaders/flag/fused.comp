@@ -153,7 +153,8 @@ void main() {
         const int far = chord == 0 ? -1 : (BOTH_HALVES ? hi + n : hi);
         const int past = chord != 0 && BOTH_HALVES && lo > -n ? lo - 1 + n : -1;
         if (MASKED_BINS) {
-          [[unroll]] for (int z = 0; z < LAYERS; ++z) SET_BIN(z, BIN(z) + (z == far ? src : (z == past ? -src : vec3(-0.0))))
+          [[unroll]] for (int z = 0; z < LAYERS; ++z)
+            SET_BIN(z, BIN(z) + (z == far ? src : (z == past ? -src : vec3(-0.0))))
         } else {
           // Without an event, 0.0 to or from bin 0: x + 0.0 and x - 0.0 are x (no bin holds -0.0).
           const int at = max(far, 0);

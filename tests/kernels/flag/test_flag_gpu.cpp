@@ -225,7 +225,8 @@ TEST(FlagRegisters, IndexedBinsOfManyLayersEqualTheCpuReference) {
   registers.values["horizontal_bins"] = static_cast<double>(FlagHorizontalBins::indexed);
   auto fused = find_method("flag").make_gpu(frame, registers);
   EXPECT_EQ(gpu::run_frames(frame, *fused, timer).back().pass, "fused");
-  EXPECT_TRUE(same_bits(frame.read_output(), flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2)));
+  const Image expected = flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2);
+  EXPECT_TRUE(same_bits(frame.read_output(), expected));
 }
 
 // The registers' f16 rounding (vector arithmetic, not packHalf2x16) at the format's edges, against
