@@ -891,10 +891,17 @@ nlohmann::json run_sweep(const std::vector<SweepPoint>& points, const SweepSetti
   nlohmann::json doc = sweep_document(points, info, record, calibration, s, policy, elapsed_s());
   doc["context"] = context;  // derive reads the device, as merge does from a file
   const bool complete = record.status == "complete";
-  add_median_intervals(doc);
-  add_noise(doc);
-  add_machine_state(s, context, doc);
-  if (s.derive) s.derive(doc);
+  try {
+    add_median_intervals(doc);
+    add_noise(doc);
+    add_machine_state(s, context, doc);
+    if (s.derive) s.derive(doc);
+  } catch (const std::exception& e) {
+    // The rounds are measured: keep them, without the figures that failed, before saying why.
+    write_results(files.partial_json, "bokehbench." + s.name, context, doc);
+    throw std::runtime_error(fmt::format("{} (after measuring {} rounds, which are in {})", e.what(),
+                                         record.round_order.size(), files.partial_json));
+  }
   // gbench's own statistics and names, for compare.py.
   // Nothing measured yet (interrupted during the first visit, or every point skipped): gbench would
   // write only "Failed to match any benchmarks", so write an empty but valid document instead.

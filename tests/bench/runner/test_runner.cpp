@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 
@@ -662,6 +664,41 @@ TEST(FrameBudget, AFrameEstimatedAboveTheBudgetIsSkippedWithTheEstimate) {
   EXPECT_EQ(over_frame_budget(gpu, 1), "estimated at least 1 s for one frame (1.1e13 taps at <= 1e13 taps/s: 1e13 "
                                        "taps/s, above any GPU's gather), over the budget of 1 s (--run-over-budget "
                                        "runs it anyway)");
+}
+
+// Figures that fail after the rounds (a fit with too few distinct sizes, say) lose no measurement: the
+// measured document is written as the partial results, and the error names it.
+TEST(Sweep, FiguresThatFailAfterMeasuringKeepTheRounds) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "bokeh_sweep_derive_fault";
+  std::filesystem::remove_all(dir);
+  Axes axes;
+  axes.methods = {"naive"};
+  axes.backends = {"cpu"};
+  axes.resolutions = {Resolution{32, 24}};
+  axes.patterns = {{3, 1}};
+  SweepSettings s;
+  s.name = "derive_fault";
+  s.out_dir = dir.string();
+  s.reference_cache = (dir / "references").string();
+  s.plot = false;
+  s.cpu_threads = 1;
+  s.policy = fast_policy();
+  s.policy.min_samples = s.policy.max_samples = 2;
+  s.derive = [](nlohmann::json&) { throw std::runtime_error("power-law fit needs distinct x values"); };
+  try {
+    run_sweep(expand(axes), s);
+    ADD_FAILURE() << "the figures' error was swallowed";
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("power-law fit needs distinct x values"), std::string::npos) << message;
+    EXPECT_NE(message.find("derive_fault.partial.json"), std::string::npos) << message;
+  }
+  std::ifstream partial(dir / "derive_fault.partial.json");
+  ASSERT_TRUE(partial.good());
+  const nlohmann::json doc = nlohmann::json::parse(partial);
+  ASSERT_EQ(doc["points"].size(), 1u);
+  EXPECT_EQ(doc["points"][0]["samples_ms"].size(), 2u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
