@@ -144,10 +144,9 @@ void adaptive(AdaptiveOptions& o) {
   if (axes.option_values.count(kOption))
     throw std::invalid_argument("--adaptive: this command measures every method both ways; leave it out");
   axes.sweep_choices = {kOption};
-  // FLAG both ways through the same 3D buffer: auto runs no buffer (registers) on lavapipe where
-  // adaptive cannot, which would compare two designs instead of the scene's bound.
-  if (const OptionSpec* buffer = find_method("flag").option("layer_buffer"); !axes.option_values.count(buffer->key))
-    axes.option_values[buffer->key] = buffer->parse("full");
+  // FLAG both ways through the same 3D buffer: auto runs none (registers) on lavapipe where adaptive
+  // cannot, which would compare two designs instead of the scene's bound.
+  flag_through_its_buffer(axes);
   axes.max_coc_px = o.max_coc_px;
   o.sweep.apply_shard(axes);
   const std::vector<SweepPoint> points = expand(axes);

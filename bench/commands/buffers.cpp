@@ -171,9 +171,7 @@ void buffers(BuffersOptions& o) {
                        : std::string());
     }
   };
-  // FLAG through its 3D buffer, the subject here (auto runs none on lavapipe at f16 and f32).
-  const OptionSpec* layer_buffer = find_method("flag").option("layer_buffer");
-  if (!axes.option_values.count(layer_buffer->key)) axes.option_values[layer_buffer->key] = layer_buffer->parse("full");
+  flag_through_its_buffer(axes);  // the subject here
   o.sweep.apply_shard(axes);
   std::vector<SweepPoint> points = expand(axes);
   if (!has_flag) {
@@ -185,7 +183,7 @@ void buffers(BuffersOptions& o) {
   std::set<std::string> shard_keys;
   for (const auto& p : points) shard_keys.insert(shard_key(p.id, p.method->name, p.variant));
   const Method& flag = find_method("flag");
-  const double streamed = layer_buffer->parse("streamed");
+  const double streamed = flag.option("layer_buffer")->parse("streamed");
   for (int rows : o.band_rows) {
     Axes banded = axes;
     banded.methods = {flag.name};

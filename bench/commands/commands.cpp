@@ -131,6 +131,11 @@ void AxisFlags::add_quick(CLI::App* cmd, const std::string& help, std::map<Axis,
   cmd->add_flag("--quick", quick, help);
 }
 
+void flag_through_its_buffer(Axes& axes) {
+  const OptionSpec* layer_buffer = find_method("flag").option("layer_buffer");
+  if (!axes.option_values.count(layer_buffer->key)) axes.option_values[layer_buffer->key] = layer_buffer->parse("full");
+}
+
 bool AxisFlags::given(Axis axis) const {
   const auto it = options_.find(axis);
   return it != options_.end() && it->second->count() > 0;

@@ -127,6 +127,10 @@ void report_verdicts(const compare::Report& report, const std::string& json_out)
 // True when the user gave `option` on the command line (so --quick must not override it).
 inline bool given(const CLI::Option* option) { return option->count() > 0; }
 
+// FLAG through its 3D buffer (layer_buffer = full) unless the command line chose where its layers go:
+// adaptive and buffers measure the buffer, which auto leaves out on CPU devices (layers in registers).
+void flag_through_its_buffer(Axes& axes);
+
 // A sweep's derived figures (ratios, fits, speed-ups, fronts) from its document's points and config,
 // the code its command runs: `merge` recomputes them over the merged shards' points with these.
 void derive_figure9(nlohmann::json& doc);
