@@ -3,8 +3,8 @@
 
 lavapipe JIT-compiles each shader into anonymous memory, so perf sees addresses without symbols. This runs a
 command (a long frame: `bokehbench render` at 3840x2160, say), samples it with `perf record` while its shader runs,
-copies the largest anonymous executable mapping (the JIT code) out of the live process with gdb, disassembles it
-with objdump and prints the share of samples by block of code and the hottest instructions. A sample lands on the
+copies the anonymous executable mappings (the JIT code) out of the live process with gdb, disassembles the one the
+samples fell in with objdump and prints the share of samples by block of code and the hottest instructions. A sample lands on the
 instruction after a slow one (a load that missed, a sqrt). Needs perf (perf_event_paranoid <= 2) and gdb; a tool
 for people tuning shaders, not part of the tests. results/README.md ("Clearing the fused pass's bins once") shows
 what it found.
@@ -22,16 +22,15 @@ import tempfile
 import time
 
 
-def largest_anonymous_code(pid):
-    best = None
+def anonymous_code(pid):
+    """The process's anonymous executable mappings (lavapipe's JIT code among them), as (start, end)."""
+    regions = []
     with open(f"/proc/{pid}/maps") as maps:
         for line in maps:
             fields = line.split()
             if len(fields) == 5 and fields[1] == "r-xp":  # no path: anonymous
-                start, end = (int(x, 16) for x in fields[0].split("-"))
-                if best is None or end - start > best[1] - best[0]:
-                    best = (start, end)
-    return best
+                regions.append(tuple(int(x, 16) for x in fields[0].split("-")))
+    return regions
 
 
 def main():
@@ -56,22 +55,26 @@ def main():
     if proc.poll() is not None:
         sys.exit(f"jit_profile: error: the command ended (exit {proc.returncode}) before {args.delay} s: "
                  "a longer frame or a shorter --delay")
-    samples_file, code_file = os.path.join(work, "perf.data"), os.path.join(work, "jit.bin")
+    samples_file = os.path.join(work, "perf.data")
     subprocess.run(["perf", "record", "-q", "-F", "4000", "-p", str(proc.pid), "-o", samples_file, "--",
                     "sleep", str(args.seconds)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
-    region = largest_anonymous_code(proc.pid) if proc.poll() is None else None
-    if region is None:
+    regions = anonymous_code(proc.pid) if proc.poll() is None else []
+    if not regions:
         proc.wait()
         sys.exit("jit_profile: error: the command ended while sampling, before its JIT code could be copied: "
                  "a longer frame or shorter --delay / --seconds")
-    subprocess.run(["gdb", "-p", str(proc.pid), "-batch", "-ex",
-                    f"dump memory {code_file} {region[0]:#x} {region[1]:#x}"],
+    # Every anonymous code mapping is copied while the process lives; the one the samples fell in is read.
+    dumps = [f"dump memory {os.path.join(work, f'code{i}.bin')} {a:#x} {b:#x}" for i, (a, b) in enumerate(regions)]
+    subprocess.run(["gdb", "-p", str(proc.pid), "-batch"] + [x for d in dumps for x in ("-ex", d)],
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
     proc.wait()
 
     script = subprocess.run(["perf", "script", "-i", samples_file, "-F", "ip"], capture_output=True, text=True,
                             check=True).stdout
     ips = [int(x, 16) for x in script.split()]
+    hits = [sum(a <= ip < b for ip in ips) for a, b in regions]
+    index = max(range(len(regions)), key=lambda i: hits[i])
+    region, code_file = regions[index], os.path.join(work, f"code{index}.bin")
     listing = subprocess.run(["objdump", "-D", "-b", "binary", "-m", "i386:x86-64", f"--adjust-vma={region[0]:#x}",
                               code_file], capture_output=True, text=True, check=True).stdout
     text = {}
