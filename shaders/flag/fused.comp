@@ -73,13 +73,14 @@ const int TOUCHED_WORDS = MASKED_BINS ? 1 : (LAYERS + 31) / 32;
 // What bin z held before this add: 0.0 at the row's first add to it, which it marks in `touched`. The
 // word is chosen by selects, not an index (a dynamic index would put `touched` in scratch memory).
 vec3 held(inout uint touched[TOUCHED_WORDS], vec3 bin, int z) {
-  bool first = false;
+  const uint bit = 1u << (z & 31);
+  uint seen = 0u;
   [[unroll]] for (int w = 0; w < TOUCHED_WORDS; ++w) {
-    const uint bit = z / 32 == w ? 1u << (z % 32) : 0u;
-    first = first || (touched[w] & bit) == 0u && bit != 0u;
-    touched[w] |= bit;
+    const uint mine = z >> 5 == w ? bit : 0u;
+    seen |= touched[w] & mine;
+    touched[w] |= mine;
   }
-  return first ? vec3(0.0) : bin;
+  return seen == 0u ? vec3(0.0) : bin;
 }
 
 void main() {
