@@ -4,8 +4,8 @@
 lavapipe JIT-compiles each shader into anonymous memory, so perf sees addresses without symbols. This runs a
 command (a long frame: `bokehbench render` at 3840x2160, say), samples it with `perf record` while its shader runs,
 copies the anonymous executable mappings (the JIT code) out of the live process with gdb, disassembles the one the
-samples fell in with objdump and prints the share of samples by block of code and the hottest instructions. A sample lands on the
-instruction after a slow one (a load that missed, a sqrt). Needs perf (perf_event_paranoid <= 2) and gdb; a tool
+samples fell in with objdump and prints the share of samples by block of code and the hottest instructions. A
+sample lands on the instruction after a slow one (a load that missed, a sqrt). Needs perf (perf_event_paranoid <= 2) and gdb; a tool
 for people tuning shaders, not part of the tests. results/README.md ("Clearing the fused pass's bins once") shows
 what it found.
 

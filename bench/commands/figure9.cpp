@@ -79,11 +79,14 @@ std::string figure_variant(const std::string& method, const std::string& precisi
                            const PrecisionsHeld& held) {
   const auto run = held.find(method);
   if (run == held.end() || run->second.size() < 2) return variant;
+  // A results file may name a package this process has not loaded: then the first held, alphabetically.
   std::string plain = *run->second.begin();
   for (const Method* m : known_methods())
-    if (m->name == method)
-      for (auto x = m->precisions.rbegin(); x != m->precisions.rend(); ++x)
-        if (run->second.count(*x)) plain = *x;
+    if (m->name == method) {
+      const auto first = std::find_if(m->precisions.begin(), m->precisions.end(),
+                                      [&](const std::string& x) { return run->second.count(x) > 0; });
+      if (first != m->precisions.end()) plain = *first;
+    }
   return precision == plain ? variant : variant + "/precision:" + precision;
 }
 
