@@ -81,12 +81,16 @@ void CocTilesGpu::record(VkCommandBuffer cmd, vk::TimestampQueries* timer, const
   barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
   vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
                        nullptr, 0, nullptr);
-  const auto tx = static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
-             ty = static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_));
-  tile_max_.dispatch(cmd, &grid, tx, ty);
-  if (timer) timer->end_pass(cmd, "tile_max");
-  tile_reach_.dispatch(cmd, &grid, tx, ty);
+  record_max(cmd, timer, grid);
+  tile_reach_.dispatch(cmd, &grid, static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
+                       static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_)));
   if (timer) timer->end_pass(cmd, "tile_reach");
+}
+
+void CocTilesGpu::record_max(VkCommandBuffer cmd, vk::TimestampQueries* timer, const PassParams& grid) const {
+  tile_max_.dispatch(cmd, &grid, static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
+                     static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_)));
+  if (timer) timer->end_pass(cmd, "tile_max");
 }
 
 int CocTilesGpu::read_scene_max_index() const {

@@ -44,6 +44,8 @@ class CocTilesGpu {
   // Records the reset of the scene maximum, then tile_max and tile_reach over `grid` (its region,
   // n and k), each stamped with its name when `timer` is given.
   void record(VkCommandBuffer cmd, vk::TimestampQueries* timer, const PassParams& grid) const;
+  // Records tile_max alone: each tile's M, what FLAG's fused pass reads (no D, no scene maximum).
+  void record_max(VkCommandBuffer cmd, vk::TimestampQueries* timer, const PassParams& grid) const;
   const vk::Buffer& buffer() const { return buffer_; }
   int tile_px() const { return tile_px_; }
   std::uint64_t allocated_bytes() const { return buffer_.allocated_bytes(); }

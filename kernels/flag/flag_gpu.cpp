@@ -272,14 +272,18 @@ class Flag final : public gpu::GpuFilter {
         layer_count_(pattern_.layers()) {
     check_frame_colour(frame, config.precision);
     if (registers) {  // both passes in one, at full resolution (flag_registers_unsupported)
-      // By constant_id: 0 LAYERS, 2 SPACING, 5 MASKED_BINS. A workgroup is 8 columns (fused.comp).
+      // By constant_id: 0 LAYERS, 2 SPACING, 5 MASKED_BINS, 6 TILE_PX. A workgroup is 8 columns
+      // (fused.comp); the tile map's M bounds the samples it loads.
+      tiles_.emplace(frame.ctx, frame.packed, low_width_, low_height_, pattern_.spacing_px, kFlagFusedTilePx);
       fused_.emplace(frame.ctx, vk::spirv(std::string("flag/fused_") + to_string(config.precision)),
-                     std::vector<VkDescriptorType>{kBuffer, kBuffer}, sizeof(PassParams),
+                     std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer}, sizeof(PassParams),
                      std::vector<std::int32_t>{layer_count_, 0, pattern_.spacing_px, 0, 0,
-                                               flag_registers_masked(config.horizontal_bins, layer_count_)},
+                                               flag_registers_masked(config.horizontal_bins, layer_count_),
+                                               kFlagFusedTilePx},
                      vk::LocalSize{8, 1});
       fused_->bind(0, frame.packed);
       fused_->bind(1, frame.output);
+      fused_->bind(2, tiles_->buffer());
       return;
     }
     const vk::Buffer* flag_input = &frame.packed;
@@ -401,6 +405,7 @@ class Flag final : public gpu::GpuFilter {
     low.half_n = layer_count_ - 1;  // the layers allocated (adaptive: what the scene needs)
     const auto lw = static_cast<std::uint32_t>(low.width_px), lh = static_cast<std::uint32_t>(low.height_px);
     if (fused_) {
+      tiles_->record_max(cmd, &timer, grid);
       // Workgroups (column block + blocks x column phase, row phase): one per 8 columns of a phase.
       fused_->dispatch(cmd, &low, flag_fused_invocations_x(low.width_px, pattern_.spacing_px),
                        static_cast<std::uint32_t>(pattern_.spacing_px));
@@ -469,7 +474,7 @@ class Flag final : public gpu::GpuFilter {
 
   // Adaptive: what the tile map found in the last frame and the layers allocated.
   nlohmann::json stats() override {
-    if (!tiles_) return nlohmann::json::object();
+    if (tile_px_ == 0) return nlohmann::json::object();  // the fused pass's map has M alone
     const PassParams grid = grid_params(frame_.params);
     nlohmann::json out = coc_tiles_stats(tiles_->read(grid.width_px, grid.height_px), pattern_, grid.width_px,
                                          grid.height_px);

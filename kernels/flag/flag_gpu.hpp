@@ -99,6 +99,9 @@ bool flag_runs_registers(const FilterOptions& options, const vk::DeviceInfo& dev
 // Invocations along a row of the fused pass (shaders/flag/fused.comp), the disc's and other apertures':
 // k phases x ceil(ceil(W / k) / 8) workgroups of 8 columns.
 std::uint32_t flag_fused_invocations_x(int width_px, int spacing_px);
+// The tile-max CoC map's tile side in px for the disc's fused pass, which loads of a row only the
+// samples of the tiles that can reach its columns: a tile of 16 px is one batch of 8 columns at k = 2.
+inline constexpr int kFlagFusedTilePx = 16;
 // Output rows per band as run: `requested` (> 0, the option band_rows), or auto's (0): the largest
 // band whose ring fits kFlagStreamBudgetBytes of the device kind, and at least kFlagStreamMinBand
 // rows. `reach_rows` = n k of FLAG's grid, `row_bytes` = one row of layers (width x layers x texel).

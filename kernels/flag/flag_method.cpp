@@ -49,7 +49,10 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   // Every binning reads each pixel's N row samples (scan: as interval ends, loaded once per 8 layers
   // of a segment, the repeats from cache) and writes its layers once.
   if (c.layer_buffer == FlagLayerBuffer::registers) {  // as on_device resolves auto
-    // Both passes in one dispatch: the same taps, and no layer leaves registers.
+    // The tile map's M (tile_max reads every radius), which bounds the row samples the fused pass
+    // loads; then both passes in one dispatch: the same taps as a bound, and no layer leaves registers.
+    const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
+    work.push_back({"tile_max", lows, lows * 16, tiles * 16});
     work.push_back({"fused", 2 * lows * low.size_n, lows * 16, lows * 16});
   } else if (c.streamed) {
     // Both passes band by band under one timestamp: the same taps and bytes, the layers through the
@@ -68,8 +71,11 @@ MemoryUse flag_gpu_memory(const FlagConfig& c, int w, int h, vk::Context* ctx) {
   if (c.layer_buffer == FlagLayerBuffer::registers) {  // as flag_layers_as_run resolves auto
     // No layer buffer: each invocation's N = 2 n + 1 running sums and a row's bins and layers (n + 1
     // each), 3 floats apiece, live in registers and the driver's stack, not in memory it allocates.
+    // The tile map's M alone is allocated.
+    use.bytes = gpu::CocTilesGpu::bytes(w, h, kFlagFusedTilePx);
     use.from_driver = ctx != nullptr;
     use.details = {{"layer_buffer_bytes", 0},
+                   {"tile_map_bytes", use.bytes},
                    {"registers", {{"floats_per_invocation", 3 * (c.pattern.size_n + 2 * c.pattern.layers())}}}};
     return use;
   }

@@ -13,7 +13,10 @@
 // values in the same order as vertical.comp, each layer first rounded to f16 (QUANTIZE_F16, to nearest
 // as the CPU reference rounds; lavapipe's f16 image store rounds toward zero, which Vulkan also
 // allows): the CPU reference's image bit for bit, and f32 the full buffer's with indexed bins.
-// Work per pixel: N row samples, each loaded once by one lane and handed to the lanes whose pattern
+// The disc's row samples are loaded only in the windows of columns that the tile-max CoC map (pass
+// tile_max) says can reach the workgroup's columns (reaching_windows): in a scene mostly in focus, a
+// fraction of the row (results/README.md, "Loading only the samples that can reach").
+// Work per pixel: up to N row samples, each loaded once by one lane and handed to the lanes whose pattern
 // holds it (lane_batch.glsl), one indexed bin add each (a load and a store per lane on lavapipe) or a
 // masked add per layer in registers (MASKED_BINS, while the layers are few: flag_registers_masked), a
 // sum over the layers and 2 n + 1 adds of the running sums. On a GPU this is too few invocations (k^2
@@ -36,6 +39,11 @@ const int HALF = BOTH_HALVES ? (LAYERS - 1) / 2 : LAYERS - 1;          // n
 #else
 const bool BOTH_HALVES = false;
 const int HALF = LAYERS - 1;
+// The tile-max CoC map's M (kernels/core/coc_tiles.hpp, pass tile_max only): which of a row's samples
+// can reach the workgroup's columns, so that a row of samples mostly in focus loads few of them.
+#define TILE_PX_ID 6
+#define TILES_BINDING 2
+#include "tiles.glsl"
 #endif
 // The bins as horizontal_bins = masked (layers.glsl): every bin tests its own range of the sample's
 // disc index and adds the sample or -0.0 (which leaves every sum as it is), no dynamically indexed
@@ -83,6 +91,38 @@ vec3 held(inout uint touched[TOUCHED_WORDS], vec3 bin, int z) {
   return seen == 0u ? vec3(0.0) : bin;
 }
 
+// The subgroup's samples of a row are loaded in windows of batch.x lattice columns (of column phase
+// phase_x), window j = columns window0 + j batch.x .. + batch.x - 1, window0 a multiple of batch.x (at
+// k = 2 and 8 lanes, a window is a tile of the map). Bit j % 32 of word j / 32: window j may hold a
+// sample that reaches one of the subgroup's columns first .. last; at most 52 windows (n <= 100, 4 or
+// more lanes).
+#if SHAPE
+uvec2 reaching_windows(int window0, int first, int last, ivec2 batch) {  // every window
+  const int windows = (last + HALF - window0) / batch.x + 1;
+  return uvec2(windows >= 32 ? ~0u : (1u << windows) - 1u, windows >= 64 ? ~0u : (1u << max(windows - 32, 0)) - 1u);
+}
+#else
+// In the rows of tile row tile_y, where the largest disc index M of the tiles under the window reaches
+// the nearest of those columns (gap^2 <= M): the samples outside add nothing. Each lane tests every
+// batch.x-th window.
+uvec2 reaching_windows(int window0, int first, int last, ivec2 batch, int tile_y, int phase_x, int columns) {
+  const int n = HALF, k = SPACING, windows = (last + n - window0) / batch.x + 1;
+  uvec2 bits = uvec2(0u);
+  for (int j0 = 0; j0 < windows; j0 += batch.x) {
+    const int j = j0 + batch.y, lo = window0 + j * batch.x;
+    const int a = max(lo, max(first - n, 0)), b = min(lo + batch.x - 1, min(last + n, columns - 1));
+    const int gap = max(max(first - b, a - last), 0);
+    int m = -1;
+    if (j < windows && a <= b)
+      for (int tile_x = (phase_x + a * k) / TILE_PX; tile_x <= (phase_x + b * k) / TILE_PX; ++tile_x)
+        m = max(m, tiles[tile_element(ivec2(tile_x, tile_y))].x);
+    const uint lanes = subgroupBallot(m >= gap * gap).x << (j0 % 32);  // batch.x divides 32
+    bits |= j0 < 32 ? uvec2(lanes, 0u) : uvec2(0u, lanes);
+  }
+  return bits;
+}
+#endif
+
 void main() {
   const int n = HALF, k = SPACING;
   // Workgroup (b + blocks phase_x, phase_y): lattice columns 8 b .. 8 b + 7 of column phase phase_x.
@@ -115,82 +155,96 @@ void main() {
 #define SET_BIN(z, value) { const vec3 v_ = (value); bins_r[z] = v_.r; bins_g[z] = v_.g; bins_b[z] = v_.b; }
   [[unroll]] for (int z = 0; z < LAYERS; ++z) SET_BIN(z, vec3(0.0))
   uint touched[TOUCHED_WORDS];
-  for (int t = 0; t < rows; ++t) {
-    const int y = phase_y + t * k;
-    if (MASKED_BINS) {
-      [[unroll]] for (int z = 0; z < LAYERS; ++z) SET_BIN(z, vec3(0.0))
-    }
-    [[unroll]] for (int w = 0; w < TOUCHED_WORDS; ++w) touched[w] = 0u;
-    // The subgroup's samples, lattice columns first - n .. last + n, left to right in batches.
-    for (int s0 = first - n; s0 <= last + n; s0 += batch.x) {
-      const int s = s0 + batch.y;
-      int index_l = -1;
-      vec3 src_l = vec3(0.0);
-      if (s >= 0 && s < columns) {
-        const vec4 sample_l = packed_input[index_of(ivec2(phase_x + s * k, y))];
-        const int gap = max(max(first - s, s - last), 0);  // to the nearest of the subgroup's columns
+  const int window0 = first - n - ((first - n) % batch.x + batch.x) % batch.x;  // rounded down
+  for (int t = 0; t < rows;) {  // a tile row of the map at a time
 #if SHAPE
-        const int index = int(sample_l.a);  // its row of the chord table
-        if (gap <= n) {  // else no column's pattern holds it
+    const uvec2 windows = reaching_windows(window0, first, last, batch);
+    const int rows_here = rows;
 #else
-        const int index = disc_index(sample_l.a * sample_l.a, k, 2 * n * n);
-        if (gap <= n && index >= gap * gap) {  // else no column's pattern holds it, or its disc misses them
+    const int tile_y = (phase_y + t * k) / TILE_PX;
+    const uvec2 windows = reaching_windows(window0, first, last, batch, tile_y, phase_x, columns);
+    const int rows_here = min(rows, ((tile_y + 1) * TILE_PX - phase_y + k - 1) / k);
 #endif
-          index_l = index;
-          src_l = sample_l.rgb;
+    for (; t < rows_here; ++t) {
+      const int y = phase_y + t * k;
+      if (MASKED_BINS) {
+        [[unroll]] for (int z = 0; z < LAYERS; ++z) SET_BIN(z, vec3(0.0))
+      }
+      [[unroll]] for (int w = 0; w < TOUCHED_WORDS; ++w) touched[w] = 0u;
+      // The subgroup's samples in those windows, left to right, a window a batch.
+      for (uvec2 todo = windows; todo != uvec2(0u);) {
+        const int s0 = window0 + batch.x * (todo.x != 0u ? findLSB(todo.x) : 32 + findLSB(todo.y));
+        todo = todo.x != 0u ? uvec2(todo.x & (todo.x - 1u), todo.y) : uvec2(0u, todo.y & (todo.y - 1u));
+        const int s = s0 + batch.y;
+        int index_l = -1;
+        const uint at_l = index_of(ivec2(phase_x + s * k, y));
+        if (s >= 0 && s < columns) {
+          const float coc_l = packed_input[at_l].a;
+          const int gap = max(max(first - s, s - last), 0);  // to the nearest of the subgroup's columns
+#if SHAPE
+          const int index = int(coc_l);  // its row of the chord table
+          if (gap <= n) index_l = index;  // else no column's pattern holds it
+#else
+          const int index = disc_index(coc_l * coc_l, k, 2 * n * n);
+          // Else no column's pattern holds it, or its disc misses them.
+          if (gap <= n && index >= gap * gap) index_l = index;
+#endif
+        }
+        // The colours of the samples that reach a column only (in a scene mostly in focus, few).
+        vec3 src_l = vec3(0.0);
+        if (index_l >= 0) src_l = packed_input[at_l].rgb;
+        uvec4 reaching = subgroupBallot(index_l >= 0);
+        while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
+          // Every lane is active, so lane `from` (its place in the batch) loaded sample s0 + from.
+          const uint from = take_lowest_lane(reaching);
+          const int i = s0 + int(from) - c, index = subgroupShuffle(index_l, from);
+          const vec3 src = subgroupShuffle(src_l, from);
+#if SHAPE
+          // The offset from the source to this column is -i k: lattice column n - i of the table.
+          const int side = 2 * n + 1, chord = i < -n || i > n ? 0 : chords[(n - i) * (side * side + 1) + index];
+          const int lo = (chord & 0xffff) - n, hi = (chord >> 16) - n - 1;
+          // +colour at its far layer, -colour below its near one (both halves only); none without a chord.
+          const int far = chord == 0 ? -1 : (BOTH_HALVES ? hi + n : hi);
+          const int past = chord != 0 && BOTH_HALVES && lo > -n ? lo - 1 + n : -1;
+          if (MASKED_BINS) {
+            [[unroll]] for (int z = 0; z < LAYERS; ++z)
+              SET_BIN(z, BIN(z) + (z == far ? src : (z == past ? -src : vec3(-0.0))))
+          } else {
+            // Without an event, 0.0 to or from bin 0: x + 0.0 and x - 0.0 are x (no bin holds -0.0).
+            const int at = max(far, 0);
+            SET_BIN(at, held(touched, BIN(at), at) + (far >= 0 ? src : vec3(0.0)))
+            if (BOTH_HALVES) {
+              const int below = max(past, 0);
+              SET_BIN(below, held(touched, BIN(below), below) - (past >= 0 ? src : vec3(0.0)))
+            }
+          }
+#else
+          if (MASKED_BINS) {
+            // z^2 <= d < z^2 + width as one unsigned compare (d < z^2 wraps above every width).
+            const int d = i < -n || i > n ? -1 : index - i * i;
+            [[unroll]] for (int z = 0; z < LAYERS; ++z) {
+              const uint width = z == LAYERS - 1 ? 0x7fffffffu : uint(2 * z + 1);
+              SET_BIN(z, BIN(z) + (uint(d - z * z) < width ? src : vec3(-0.0)))
+            }
+          } else {
+            const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
+            // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
+            const int at = max(z, 0);
+            SET_BIN(at, held(touched, BIN(at), at) + (z >= 0 ? src : vec3(0.0)))
+          }
+#endif
         }
       }
-      uvec4 reaching = subgroupBallot(index_l >= 0);
-      while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
-        // Every lane is active, so lane `from` (its place in the batch) loaded sample s0 + from.
-        const uint from = take_lowest_lane(reaching);
-        const int i = s0 + int(from) - c, index = subgroupShuffle(index_l, from);
-        const vec3 src = subgroupShuffle(src_l, from);
-#if SHAPE
-        // The offset from the source to this column is -i k: lattice column n - i of the table.
-        const int side = 2 * n + 1, chord = i < -n || i > n ? 0 : chords[(n - i) * (side * side + 1) + index];
-        const int lo = (chord & 0xffff) - n, hi = (chord >> 16) - n - 1;
-        // +colour at its far layer, -colour below its near one (both halves only); none without a chord.
-        const int far = chord == 0 ? -1 : (BOTH_HALVES ? hi + n : hi);
-        const int past = chord != 0 && BOTH_HALVES && lo > -n ? lo - 1 + n : -1;
-        if (MASKED_BINS) {
-          [[unroll]] for (int z = 0; z < LAYERS; ++z)
-            SET_BIN(z, BIN(z) + (z == far ? src : (z == past ? -src : vec3(-0.0))))
-        } else {
-          // Without an event, 0.0 to or from bin 0: x + 0.0 and x - 0.0 are x (no bin holds -0.0).
-          const int at = max(far, 0);
-          SET_BIN(at, held(touched, BIN(at), at) + (far >= 0 ? src : vec3(0.0)))
-          if (BOTH_HALVES) {
-            const int below = max(past, 0);
-            SET_BIN(below, held(touched, BIN(below), below) - (past >= 0 ? src : vec3(0.0)))
-          }
-        }
-#else
-        if (MASKED_BINS) {
-          // z^2 <= d < z^2 + width as one unsigned compare (d < z^2 wraps above every width).
-          const int d = i < -n || i > n ? -1 : index - i * i;
-          [[unroll]] for (int z = 0; z < LAYERS; ++z) {
-            const uint width = z == LAYERS - 1 ? 0x7fffffffu : uint(2 * z + 1);
-            SET_BIN(z, BIN(z) + (uint(d - z * z) < width ? src : vec3(-0.0)))
-          }
-        } else {
-          const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
-          // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
-          const int at = max(z, 0);
-          SET_BIN(at, held(touched, BIN(at), at) + (z >= 0 ? src : vec3(0.0)))
-        }
-#endif
+      vec3 layer[LAYERS];
+      vec3 running = vec3(0.0);
+      [[unroll]] for (int z = LAYERS - 1; z >= 0; --z) {
+        running += MASKED_BINS || (touched[z / 32] & (1u << (z % 32))) != 0u ? BIN(z) : vec3(0.0);
+        layer[z] = stored(running);
       }
+      // The same additions in the same order as adding all, then moving up.
+      WRITE(t, sums[0] + LAYER_FOR(0))
+      [[unroll]] for (int d = 0; d + 1 < SUMS; ++d) sums[d] = sums[d + 1] + LAYER_FOR(d + 1);
     }
-    vec3 layer[LAYERS];
-    vec3 running = vec3(0.0);
-    [[unroll]] for (int z = LAYERS - 1; z >= 0; --z) {
-      running += MASKED_BINS || (touched[z / 32] & (1u << (z % 32))) != 0u ? BIN(z) : vec3(0.0);
-      layer[z] = stored(running);
-    }
-    // The same additions in the same order as adding all, then moving up.
-    WRITE(t, sums[0] + LAYER_FOR(0))
-    [[unroll]] for (int d = 0; d + 1 < SUMS; ++d) sums[d] = sums[d + 1] + LAYER_FOR(d + 1);
   }
   for (int t = rows; t < rows + n; ++t) {  // rows past the frame add nothing
     WRITE(t, sums[0])
