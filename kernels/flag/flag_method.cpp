@@ -295,8 +295,9 @@ std::vector<OptionSpec> flag_options() {
            "(B = --band-rows output rows a band), the two passes alternating per band in one command buffer: "
            "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
            "fused, each invocation walking down a column with the layers in registers (buffer scale 1, f32 or "
-           "f16, adaptive off): the CPU reference's image bit for bit, for CPU devices (lavapipe stores and loads "
-           "a texel lane by lane); auto (the default): registers where it runs on a CPU device, any aperture, "
+           "f16, adaptive off; the disc loads only the row samples the tile-max CoC map lets reach its columns): "
+           "the CPU reference's image bit for bit, for CPU devices (lavapipe stores and loads a texel lane by "
+           "lane); auto (the default): registers where it runs on a CPU device, any aperture, "
            "else full",
            0, 0, 0, false, flag_layer_buffers(), {1, 2, 3}},
           {"band_rows",
