@@ -217,6 +217,26 @@ TEST(FlagRegisters, EqualsTheCpuReferenceBitForBit) {
   }
 }
 
+// The fused pass's f16 image (layer_buffer = registers, bins as auto chooses unless given) of scene `s`
+// with its largest CoC 1.2x the pattern's, beside the CPU reference's image of the same packed input.
+struct RegistersRun {
+  Image output, reference;
+  std::string last_pass;
+};
+RegistersRun run_registers_f16(const Scene& s, const GatherPattern& pattern,
+                               std::optional<FlagHorizontalBins> bins = std::nullopt) {
+  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
+  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
+  vk::TimestampQueries timer(context(), 16);
+  FilterOptions registers = options_for("flag", pattern, "f16");
+  registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+  if (bins) registers.values["horizontal_bins"] = static_cast<double>(*bins);
+  auto fused = find_method("flag").make_gpu(frame, registers);
+  const auto passes = gpu::run_frames(frame, *fused, timer);
+  return {frame.read_output(), flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2),
+          passes.back().pass};
+}
+
 // The fused pass loads a row's samples only in the windows of columns whose tiles' largest disc can
 // reach the workgroup's columns (the tile map's M): in scenes mostly in focus with a few wide discs,
 // most windows are left out, and the image stays the CPU reference's bit for bit, for k = 1, 2 and 3
@@ -227,16 +247,9 @@ TEST(FlagRegisters, LoadsOnlyTheSamplesTheTileMapLetsReachAndKeepsTheImage) {
     for (const GatherPattern pattern : {GatherPattern{81, 2}, GatherPattern{41, 1}, GatherPattern{27, 3},
                                         GatherPattern{21, 2}}) {
       SCOPED_TRACE(fmt::format("{} N {} k {}", scene, pattern.size_n, pattern.spacing_px));
-      const Scene s = make_scene(scene, 160, 40);
-      const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-      gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-      vk::TimestampQueries timer(context(), 16);
-      FilterOptions registers = options_for("flag", pattern, "f16");
-      registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
-      auto fused = find_method("flag").make_gpu(frame, registers);
-      EXPECT_EQ(gpu::run_frames(frame, *fused, timer).back().pass, "fused");
-      EXPECT_TRUE(same_bits(frame.read_output(),
-                            flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2)));
+      const RegistersRun run = run_registers_f16(make_scene(scene, 160, 40), pattern);
+      EXPECT_EQ(run.last_pass, "fused");
+      EXPECT_TRUE(same_bits(run.output, run.reference));
     }
 }
 
@@ -244,18 +257,10 @@ TEST(FlagRegisters, LoadsOnlyTheSamplesTheTileMapLetsReachAndKeepsTheImage) {
 // (fused.comp clears the bins once, not every row); 65 layers use three words, every disc reaching all
 // of them. The CPU reference's image bit for bit.
 TEST(FlagRegisters, IndexedBinsOfManyLayersEqualTheCpuReference) {
-  const GatherPattern pattern{129, 1};
-  const Scene s = make_scene("hoops", 40, 30);
-  const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-  gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-  vk::TimestampQueries timer(context(), 16);
-  FilterOptions registers = options_for("flag", pattern, "f16");
-  registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
-  registers.values["horizontal_bins"] = static_cast<double>(FlagHorizontalBins::indexed);
-  auto fused = find_method("flag").make_gpu(frame, registers);
-  EXPECT_EQ(gpu::run_frames(frame, *fused, timer).back().pass, "fused");
-  const Image expected = flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2);
-  EXPECT_TRUE(same_bits(frame.read_output(), expected));
+  const RegistersRun run =
+      run_registers_f16(make_scene("hoops", 40, 30), GatherPattern{129, 1}, FlagHorizontalBins::indexed);
+  EXPECT_EQ(run.last_pass, "fused");
+  EXPECT_TRUE(same_bits(run.output, run.reference));
 }
 
 // The registers' f16 rounding (vector arithmetic, not packHalf2x16) at the format's edges, against
@@ -268,15 +273,9 @@ TEST(FlagRegisters, F16LayersRoundAsTheCpuReferenceAtTheFormatsEdges) {
       for (int c = 0; c < 3; ++c) s.color.px(x, y)[c] *= x < 24 ? 1e-6f : (x < 48 ? 1.0f : 1e6f);
   for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{41, 2}}) {  // masked and indexed bins
     SCOPED_TRACE(fmt::format("N {}", pattern.size_n));
-    const Lens lens = with_max_coc_radius(s.lens, s.depth_m, pattern.max_radius_px() * 1.2);
-    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, pattern);
-    vk::TimestampQueries timer(context(), 16);
-    FilterOptions registers = options_for("flag", pattern, "f16");
-    registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
-    auto fused = find_method("flag").make_gpu(frame, registers);
-    gpu::run_frames(frame, *fused, timer);
-    const Image output = frame.read_output();
-    EXPECT_TRUE(same_bits(output, flag_blur_reference(frame.read_packed(), pattern, LayerPrecision::f16, 2)));
+    const RegistersRun run = run_registers_f16(s, pattern);
+    const Image& output = run.output;
+    EXPECT_TRUE(same_bits(output, run.reference));
     int subnormal = 0, infinite = 0;  // the edges were reached
     for (const float v : output.pixels) {
       subnormal += v > 0 && v < 6.103515625e-05f;
