@@ -190,6 +190,8 @@ bool flag_runs_registers(const FilterOptions& options, const vk::DeviceInfo& dev
   return true;
 }
 
+bool flag_fused_reads_tile_map(int layers) { return layers >= 13; }
+
 std::uint32_t flag_fused_invocations_x(int width_px, int spacing_px) {
   const auto k = static_cast<std::uint32_t>(spacing_px);
   return ceil_div(ceil_div(static_cast<std::uint32_t>(width_px), k), 8u) * 8u * k;
@@ -272,14 +274,14 @@ class Flag final : public gpu::GpuFilter {
         layer_count_(pattern_.layers()) {
     check_frame_colour(frame, config.precision);
     if (registers) {  // both passes in one, at full resolution (flag_registers_unsupported)
-      // By constant_id: 0 LAYERS, 2 SPACING, 5 MASKED_BINS, 6 TILE_PX. A workgroup is 8 columns
-      // (fused.comp); the tile map's M bounds the samples it loads.
+      // By constant_id: 0 LAYERS, 2 SPACING, 5 MASKED_BINS, 6 TILE_PX, 7 TILE_MAP. A workgroup is 8
+      // columns (fused.comp); the tile map's M bounds the samples it loads (bound where it is not read).
       tiles_.emplace(frame.ctx, frame.packed, low_width_, low_height_, pattern_.spacing_px, kFlagFusedTilePx);
       fused_.emplace(frame.ctx, vk::spirv(std::string("flag/fused_") + to_string(config.precision)),
                      std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer}, sizeof(PassParams),
                      std::vector<std::int32_t>{layer_count_, 0, pattern_.spacing_px, 0, 0,
                                                flag_registers_masked(config.horizontal_bins, layer_count_),
-                                               kFlagFusedTilePx},
+                                               kFlagFusedTilePx, flag_fused_reads_tile_map(layer_count_)},
                      vk::LocalSize{8, 1});
       fused_->bind(0, frame.packed);
       fused_->bind(1, frame.output);
@@ -405,7 +407,7 @@ class Flag final : public gpu::GpuFilter {
     low.half_n = layer_count_ - 1;  // the layers allocated (adaptive: what the scene needs)
     const auto lw = static_cast<std::uint32_t>(low.width_px), lh = static_cast<std::uint32_t>(low.height_px);
     if (fused_) {
-      tiles_->record_max(cmd, &timer, grid);
+      if (flag_fused_reads_tile_map(layer_count_)) tiles_->record_max(cmd, &timer, grid);
       // Workgroups (column block + blocks x column phase, row phase): one per 8 columns of a phase.
       fused_->dispatch(cmd, &low, flag_fused_invocations_x(low.width_px, pattern_.spacing_px),
                        static_cast<std::uint32_t>(pattern_.spacing_px));

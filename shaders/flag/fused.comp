@@ -36,11 +36,14 @@ layout(constant_id = 2) const int SPACING = 2;  // k, a constant divisor for dis
 layout(constant_id = 8) const bool BOTH_HALVES = false;
 layout(std430, binding = 2) readonly buffer Chords { int chords[]; };  // FlagShapeTable::chords
 const int HALF = BOTH_HALVES ? (LAYERS - 1) / 2 : LAYERS - 1;          // n
+const bool TILE_MAP = false;  // a chord-table index is not a disc index
 #else
 const bool BOTH_HALVES = false;
 const int HALF = LAYERS - 1;
 // The tile-max CoC map's M (kernels/core/coc_tiles.hpp, pass tile_max only): which of a row's samples
-// can reach the workgroup's columns, so that a row of samples mostly in focus loads few of them.
+// can reach the workgroup's columns, so that a row of samples mostly in focus loads few of them. Read
+// from 13 layers on (flag_fused_reads_tile_map): below, its pass costs more than the loads it saves.
+layout(constant_id = 7) const bool TILE_MAP = true;
 #define TILE_PX_ID 6
 #define TILES_BINDING 2
 #include "tiles.glsl"
@@ -96,12 +99,11 @@ vec3 held(inout uint touched[TOUCHED_WORDS], vec3 bin, int z) {
 // k = 2 and 8 lanes, a window is a tile of the map). Bit j % 32 of word j / 32: window j may hold a
 // sample that reaches one of the subgroup's columns first .. last; at most 52 windows (n <= 100, 4 or
 // more lanes).
-#if SHAPE
-uvec2 reaching_windows(int window0, int first, int last, ivec2 batch) {  // every window
+uvec2 every_window(int window0, int last, ivec2 batch) {
   const int windows = (last + HALF - window0) / batch.x + 1;
   return uvec2(windows >= 32 ? ~0u : (1u << windows) - 1u, windows >= 64 ? ~0u : (1u << max(windows - 32, 0)) - 1u);
 }
-#else
+#if !SHAPE
 // In the rows of tile row tile_y, where the largest disc index M of the tiles under the window reaches
 // the nearest of those columns (gap^2 <= M): the samples outside add nothing. Each lane tests every
 // batch.x-th window.
@@ -155,15 +157,18 @@ void main() {
 #define SET_BIN(z, value) { const vec3 v_ = (value); bins_r[z] = v_.r; bins_g[z] = v_.g; bins_b[z] = v_.b; }
   [[unroll]] for (int z = 0; z < LAYERS; ++z) SET_BIN(z, vec3(0.0))
   uint touched[TOUCHED_WORDS];
-  const int window0 = first - n - ((first - n) % batch.x + batch.x) % batch.x;  // rounded down
+  // The first window: at first - n, or rounded down to a multiple of batch.x where the map is read (its
+  // windows then lie in as few tiles as can be, one more window at most).
+  const int window0 = first - n - (TILE_MAP ? ((first - n) % batch.x + batch.x) % batch.x : 0);
   for (int t = 0; t < rows;) {  // a tile row of the map at a time
 #if SHAPE
-    const uvec2 windows = reaching_windows(window0, first, last, batch);
+    const uvec2 windows = every_window(window0, last, batch);
     const int rows_here = rows;
 #else
     const int tile_y = (phase_y + t * k) / TILE_PX;
-    const uvec2 windows = reaching_windows(window0, first, last, batch, tile_y, phase_x, columns);
-    const int rows_here = min(rows, ((tile_y + 1) * TILE_PX - phase_y + k - 1) / k);
+    const uvec2 windows = TILE_MAP ? reaching_windows(window0, first, last, batch, tile_y, phase_x, columns)
+                                   : every_window(window0, last, batch);
+    const int rows_here = TILE_MAP ? min(rows, ((tile_y + 1) * TILE_PX - phase_y + k - 1) / k) : rows;
 #endif
     for (; t < rows_here; ++t) {
       const int y = phase_y + t * k;
