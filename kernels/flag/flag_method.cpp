@@ -51,8 +51,10 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   if (c.layer_buffer == FlagLayerBuffer::registers) {  // as on_device resolves auto
     // The tile map's M (tile_max reads every radius), which bounds the row samples the fused pass
     // loads; then both passes in one dispatch: the same taps as a bound, and no layer leaves registers.
-    const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
-    if (flag_fused_reads_tile_map(low.layers())) work.push_back({"tile_max", lows, lows * 16, tiles * 16});
+    if (flag_fused_reads_tile_map(low.layers())) {
+      const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
+      work.push_back({"tile_max", lows, lows * 16, tiles * 16});
+    }
     work.push_back({"fused", 2 * lows * low.size_n, lows * 16, lows * 16});
   } else if (c.streamed) {
     // Both passes band by band under one timestamp: the same taps and bytes, the layers through the

@@ -95,8 +95,8 @@ vec3 held(inout uint touched[TOUCHED_WORDS], vec3 bin, int z) {
 }
 
 // The subgroup's samples of a row are loaded in windows of batch.x lattice columns (of column phase
-// phase_x), window j = columns window0 + j batch.x .. + batch.x - 1, window0 a multiple of batch.x (at
-// k = 2 and 8 lanes, a window is a tile of the map). Bit j % 32 of word j / 32: window j may hold a
+// phase_x), window j = columns window0 + j batch.x .. + batch.x - 1 (with the map, window0 a multiple of
+// batch.x: at k = 2 and 8 lanes, a window is a tile). Bit j % 32 of word j / 32: window j may hold a
 // sample that reaches one of the subgroup's columns first .. last; at most 52 windows (n <= 100, 4 or
 // more lanes).
 uvec2 every_window(int window0, int last, ivec2 batch) {
