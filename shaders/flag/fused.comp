@@ -199,12 +199,12 @@ void main() {
         vec3 src_l = vec3(0.0);
         if (index_l >= 0) src_l = packed_input[at_l].rgb;
         uvec4 reaching = subgroupBallot(index_l >= 0);
+#if SHAPE
         while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
           // Every lane is active, so lane `from` (its place in the batch) loaded sample s0 + from.
           const uint from = take_lowest_lane(reaching);
           const int i = s0 + int(from) - c, index = subgroupShuffle(index_l, from);
           const vec3 src = subgroupShuffle(src_l, from);
-#if SHAPE
           // The offset from the source to this column is -i k: lattice column n - i of the table.
           const int side = 2 * n + 1, chord = i < -n || i > n ? 0 : chords[(n - i) * (side * side + 1) + index];
           const int lo = (chord & 0xffff) - n, hi = (chord >> 16) - n - 1;
@@ -223,22 +223,43 @@ void main() {
               SET_BIN(below, held(touched, BIN(below), below) - (past >= 0 ? src : vec3(0.0)))
             }
           }
+        }
 #else
-          if (MASKED_BINS) {
+        if (MASKED_BINS) {
+          while (reaching != uvec4(0)) {  // uniform exit, in the order of the samples
+            // Every lane is active, so lane `from` (its place in the batch) loaded sample s0 + from.
+            const uint from = take_lowest_lane(reaching);
+            const int i = s0 + int(from) - c, index = subgroupShuffle(index_l, from);
+            const vec3 src = subgroupShuffle(src_l, from);
             // z^2 <= d < z^2 + width as one unsigned compare (d < z^2 wraps above every width).
             const int d = i < -n || i > n ? -1 : index - i * i;
             [[unroll]] for (int z = 0; z < LAYERS; ++z) {
               const uint width = z == LAYERS - 1 ? 0x7fffffffu : uint(2 * z + 1);
               SET_BIN(z, BIN(z) + (uint(d - z * z) < width ? src : vec3(-0.0)))
             }
-          } else {
-            const int z = i < -n || i > n ? -1 : reach_layer(index, i, n);
+          }
+        } else {
+          // One sample ahead: the next sample's layer (its sqrt) is worked out before this one's bin
+          // is updated, so the two overlap.
+          bool more = reaching != uvec4(0);
+          uint from = take_lowest_lane(reaching);
+          int i = s0 + int(from) - c;
+          int z = i < -n || i > n ? -1 : reach_layer(subgroupShuffle(index_l, from), i, n);
+          vec3 src = subgroupShuffle(src_l, from);
+          while (more) {  // uniform exit, in the order of the samples
+            more = reaching != uvec4(0);
+            const uint next = take_lowest_lane(reaching);
+            const int i_next = s0 + int(next) - c;
+            const int z_next = i_next < -n || i_next > n ? -1 : reach_layer(subgroupShuffle(index_l, next), i_next, n);
+            const vec3 src_next = subgroupShuffle(src_l, next);
             // Without a layer, +0.0 to bin 0: the same bits as no add (no bin holds -0.0).
             const int at = max(z, 0);
             SET_BIN(at, held(touched, BIN(at), at) + (z >= 0 ? src : vec3(0.0)))
+            z = z_next;
+            src = src_next;
           }
-#endif
         }
+#endif
       }
       vec3 layer[LAYERS];
       vec3 running = vec3(0.0);

@@ -13,9 +13,10 @@ ivec2 sample_batch() {
   return ivec2(subgroupBallotBitCount(lanes), subgroupBallotExclusiveBitCount(lanes));
 }
 
-// The lowest lane of the ballot `reaching` (uniform), taken out of it.
+// The lowest lane of the ballot `reaching` (uniform), taken out of it; 0 from an empty ballot, which
+// stays empty.
 uint take_lowest_lane(inout uvec4 reaching) {
-  const uint lane = subgroupBallotFindLSB(reaching);
+  const uint lane = reaching == uvec4(0) ? 0u : subgroupBallotFindLSB(reaching);
   reaching[lane / 32] &= ~(1u << (lane % 32));
   return lane;
 }
