@@ -82,15 +82,19 @@ void CocTilesGpu::record(VkCommandBuffer cmd, vk::TimestampQueries* timer, const
   vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
                        nullptr, 0, nullptr);
   record_max(cmd, timer, grid);
-  tile_reach_.dispatch(cmd, &grid, static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
-                       static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_)));
+  dispatch_per_tile(cmd, tile_reach_, grid);
   if (timer) timer->end_pass(cmd, "tile_reach");
 }
 
 void CocTilesGpu::record_max(VkCommandBuffer cmd, vk::TimestampQueries* timer, const PassParams& grid) const {
-  tile_max_.dispatch(cmd, &grid, static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
-                     static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_)));
+  dispatch_per_tile(cmd, tile_max_, grid);
   if (timer) timer->end_pass(cmd, "tile_max");
+}
+
+void CocTilesGpu::dispatch_per_tile(VkCommandBuffer cmd, const vk::ComputePipeline& pass,
+                                    const PassParams& grid) const {
+  pass.dispatch(cmd, &grid, static_cast<std::uint32_t>(ceil_div(grid.width_px, tile_px_)),
+                static_cast<std::uint32_t>(ceil_div(grid.height_px, tile_px_)));
 }
 
 int CocTilesGpu::read_scene_max_index() const {

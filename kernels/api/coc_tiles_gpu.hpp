@@ -59,6 +59,9 @@ class CocTilesGpu {
   CocTiles read(int width_px, int height_px, std::vector<int>* write_layers = nullptr) const;
 
  private:
+  // One invocation per tile of `grid`.
+  void dispatch_per_tile(VkCommandBuffer cmd, const vk::ComputePipeline& pass, const PassParams& grid) const;
+
   vk::Context& ctx_;
   int tile_px_;
   vk::Buffer buffer_;
