@@ -133,6 +133,7 @@ def figure9_rows(doc):
                                 f"{backend_name[backend]}",
                                 f"N = {first['N']}: {ratio_text(first)}", context, device[backend], FIGURE9))
     rows += baseline_rows(doc, frame, context, gpu)
+    rows += fused_rows(doc, frame, context, gpu)
     for backend in ("gpu", "cpu"):
         fits = {}
         for s in doc.get("series", []):
@@ -146,6 +147,28 @@ def figure9_rows(doc):
             rows.append(row(f"growth exponent b of t ~ N^b, {backend_name[backend]}{sizes} (quadratic: 2; linear: 1)",
                             text, context, device[backend], FIGURE9))
     return rows
+
+
+def fused_rows(doc, frame, context, gpu):
+    """FLAG's fused pass on the GPU (its layers in registers) against the run's copy probe, counted as the bytes
+    of the two passes it replaces (the 3D buffer written and read) and as its own, over the N measured."""
+    seen = {}
+    for p in doc.get("points", []):
+        t = p.get("throughput", {}).get("fused", {})
+        if p["backend"] == "gpu" and p["method"] == "flag" and not p.get("variant") and "fraction_of_copy_unfused" in t:
+            seen[p["N"]] = t
+    if not seen:
+        return []
+
+    def span(key):
+        values = [100 * t[key] for t in seen.values()]
+        return f"{min(values):.0f}-{max(values):.0f}%"
+
+    return [row(f"FLAG's fused pass (layers in registers), GPU, N = {min(seen)}-{max(seen)}: its speed against the "
+                f"run's copy probe counted as the unfused passes' bytes (the layer buffer written and read) ({frame})",
+                f"{span('fraction_of_copy_unfused')} (its own bytes: {span('fraction_of_copy_bandwidth')}; "
+                f"{span('fraction_of_fma_taps')} of the FMA ceiling); no interval (medians over the probe's median)",
+                context, gpu, FIGURE9)]
 
 
 def baseline_rows(doc, frame, context, gpu):

@@ -9,7 +9,9 @@ One panel per backend (its own probes). The slanted line is the copy probe's ban
 taps/byte), the flat one the FMA probe's rate at one vec4 multiply-add (8 FLOPs) a tap; a pass cannot sit
 above either. Each pass is one colour and marker, one point per N joined in N's order (the largest N
 labelled); the pass furthest below its nearer ceiling, listed first in the legend, is where time is lost.
-CPU references are timed whole ("frame").
+CPU references are timed whole ("frame"). A fused pass (FLAG's layers kept in registers) is drawn again in
+hollow markers at the taps per byte of the unfused passes' bytes (its layers written and read): its speed
+against the copy probe counted as the work of the passes it replaces.
 """
 import bokehplot
 import matplotlib.pyplot as plt
@@ -18,7 +20,8 @@ TAP_FLOPS = 8  # bench/runner/roofline.hpp: kTapFlops
 
 
 def passes_of(doc, backend):
-    """{(method variant precision, pass): [(N, taps_per_byte, taps_per_s, fraction of the nearer ceiling)]}."""
+    """{(method variant precision, pass): [(N, taps_per_byte, taps_per_s, fraction of the nearer ceiling,
+    taps per unfused byte or None)]}."""
     out = {}
     for p in doc["points"]:
         if p["backend"] != backend:
@@ -28,7 +31,8 @@ def passes_of(doc, backend):
         for name, t in p.get("throughput", {}).items():
             if t.get("taps_per_byte") and t.get("taps_per_s"):
                 nearer = max(t.get("fraction_of_copy_bandwidth", 0), t.get("fraction_of_fma_taps", 0))
-                out.setdefault((what, name), []).append((p["N"], t["taps_per_byte"], t["taps_per_s"], nearer))
+                unfused = t["taps_per_s"] / (t["unfused_gb_per_s"] * 1e9) if "unfused_gb_per_s" in t else None
+                out.setdefault((what, name), []).append((p["N"], t["taps_per_byte"], t["taps_per_s"], nearer, unfused))
     return {k: sorted(v) for k, v in out.items()}
 
 
@@ -38,7 +42,7 @@ def panel(ax, doc, backend):
     order = sorted(series, key=lambda k: max(v[3] for v in series[k]))
     markers = bokehplot.markers_for([f"{w} {p}" for w, p in order])
     colours = plt.get_cmap("tab20")
-    xs = [v[1] for s in series.values() for v in s]
+    xs = [x for s in series.values() for v in s for x in (v[1], v[4]) if x]
     x_lo, x_hi = min(xs) / 3, max(xs) * 3
     copy_gbps, fma_gflops = limits.get(f"{backend}_copy_gb_per_s"), limits.get(f"{backend}_fma_gflop_per_s")
     if copy_gbps:
@@ -52,7 +56,13 @@ def panel(ax, doc, backend):
         label = f"{key[0]} {key[1]} ({100 * max(v[3] for v in pts):.0f}% of a ceiling at best)"
         ax.plot([v[1] for v in pts], [v[2] for v in pts], marker=markers[f"{key[0]} {key[1]}"], ms=5, lw=0.8,
                 color=colours(i % 20), label=label)
-        n, x, y, _ = pts[-1]
+        unfused = [(v[4], v[2]) for v in pts if v[4]]
+        if unfused:
+            share = max(v[2] / (v[4] * copy_gbps * 1e9) for v in pts if v[4]) if copy_gbps else 0
+            ax.plot([u[0] for u in unfused], [u[1] for u in unfused], marker=markers[f"{key[0]} {key[1]}"], ms=5,
+                    lw=0.8, ls=":", mfc="none", color=colours(i % 20),
+                    label=f"{key[0]} {key[1]} counted as the unfused passes' bytes ({100 * share:.0f}% of copy at best)")
+        n, x, y = pts[-1][:3]
         ax.annotate(f"N={n}", (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points", color=colours(i % 20))
     ax.set_xscale("log")
     ax.set_yscale("log")

@@ -356,6 +356,7 @@ def roofline(d):
     """Each pass against the run's probes, recomputed from the point's median pass time, its declared work and the
     probes' own medians (measurement.probes: bytes or FLOPs over the median ms), not from the limits written."""
     probes = d["measurement"]["probes"]
+    unfused = 0
     def limit(name, per):
         p = probes[name]
         return p[per] / (p["ms"]["median"] * 1e-3)
@@ -371,9 +372,15 @@ def roofline(d):
             assert close(t["fraction_of_copy_bandwidth"], moved / (ms * 1e-3) / copy_bytes_per_s), (p["id"], name, t)
             assert close(t["fraction_of_fma_taps"], taps / (ms * 1e-3) / (fma_flops_per_s / 8)), (p["id"], name, t)
             assert moved == 0 or close(t["taps_per_byte"], taps / moved), (p["id"], name, t)
+            kept = sum(w.get("bytes_kept", 0) for w in works)  # a fused pass's layers, counted as unfused
+            assert ("fraction_of_copy_unfused" in t) == (kept > 0), (p["id"], name, t)
+            if kept:
+                assert close(t["fraction_of_copy_unfused"], (moved + kept) / (ms * 1e-3) / copy_bytes_per_s), (p["id"], name, t)
+                unfused += 1
             checked += 1
     assert checked, "no pass with a throughput"
-    print(checked, "passes' roofline fractions check against their work, times and the probes")
+    print(checked, "passes' roofline fractions check against their work, times and the probes,", unfused,
+          "counted as unfused too")
 
 
 if __name__ == "__main__":

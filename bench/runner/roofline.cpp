@@ -24,7 +24,7 @@ struct Range {
 };
 
 struct PassRow {
-  Range n, gb_per_s, copy, taps_per_s, fma;
+  Range n, gb_per_s, copy, unfused, taps_per_s, fma;
   double nearest() const {  // the larger of the two fractions at the pass's best point: how near a limit it gets
     return std::max(copy.low <= copy.high ? copy.high : 0.0, fma.low <= fma.high ? fma.high : 0.0);
   }
@@ -40,6 +40,8 @@ void add_roofline(nlohmann::json& points, const nlohmann::json& limits) {
     for (auto& [pass, t] : point["throughput"].items()) {
       if (limits.contains(copy) && t.contains("gb_per_s"))
         t["fraction_of_copy_bandwidth"] = t["gb_per_s"].get<double>() / limits[copy].get<double>();
+      if (limits.contains(copy) && t.contains("unfused_gb_per_s"))
+        t["fraction_of_copy_unfused"] = t["unfused_gb_per_s"].get<double>() / limits[copy].get<double>();
       if (limits.contains(fma) && t.contains("taps_per_s"))
         t["fraction_of_fma_taps"] = t["taps_per_s"].get<double>() / (limits[fma].get<double>() * 1e9 / kTapFlops);
       double bytes = 0;  // the pass's, or the whole frame's for a CPU reference timed whole
@@ -65,6 +67,7 @@ void print_roofline(const nlohmann::json& doc) {
       if (t.contains("gb_per_s")) row.gb_per_s.add(t["gb_per_s"].get<double>());
       if (t.contains("taps_per_s")) row.taps_per_s.add(t["taps_per_s"].get<double>());
       if (t.contains("fraction_of_copy_bandwidth")) row.copy.add(t["fraction_of_copy_bandwidth"].get<double>());
+      if (t.contains("fraction_of_copy_unfused")) row.unfused.add(t["fraction_of_copy_unfused"].get<double>());
       if (t.contains("fraction_of_fma_taps")) row.fma.add(t["fraction_of_fma_taps"].get<double>());
     }
   }
@@ -80,14 +83,15 @@ void print_roofline(const nlohmann::json& doc) {
                                      limits[fma].get<double>() / kTapFlops));
   }
   fmt::print("\nRoofline per pass, furthest from its limits first (this run's probes: {}; a tap is at least one vec4 "
-             "FMA; ranges over the N measured):\n", fmt::join(ceilings, "; "));
-  fmt::print("  {:<4} {:<26} {:<16} {:>9} {:>13} {:>12} {:>13} {:>12}\n", "on", "method precision", "pass", "N",
-             "GB/s", "of copy", "G taps/s", "of FMA");
+             "FMA; ranges over the N measured; \"unfused\": a fused pass's bytes with the layers it keeps in registers, "
+             "as the unfused passes move them):\n", fmt::join(ceilings, "; "));
+  fmt::print("  {:<4} {:<26} {:<16} {:>9} {:>13} {:>12} {:>17} {:>13} {:>12}\n", "on", "method precision", "pass",
+             "N", "GB/s", "of copy", "of copy, unfused", "G taps/s", "of FMA");
   for (const auto& [key, row] : order) {
     const auto& [backend, what, pass] = key;
-    fmt::print("  {:<4} {:<26} {:<16} {:>9} {:>13} {:>12} {:>13} {:>12}\n", backend, what, pass, row.n.text(1, 0),
-               row.gb_per_s.text(1, 2), row.copy.text(100, 0, "%"), row.taps_per_s.text(1e-9, 3),
-               row.fma.text(100, 1, "%"));
+    fmt::print("  {:<4} {:<26} {:<16} {:>9} {:>13} {:>12} {:>17} {:>13} {:>12}\n", backend, what, pass,
+               row.n.text(1, 0), row.gb_per_s.text(1, 2), row.copy.text(100, 0, "%"), row.unfused.text(100, 0, "%"),
+               row.taps_per_s.text(1e-9, 3), row.fma.text(100, 1, "%"));
   }
 }
 

@@ -13,7 +13,8 @@ inline constexpr double kTapFlops = 8;
 
 // Adds to each pass's throughput of each point (point.throughput.<pass>: taps_per_s, gb_per_s) its
 // fraction_of_copy_bandwidth, fraction_of_fma_taps and taps_per_byte, against limits
-// (measurement.limits: <backend>_copy_gb_per_s, <backend>_fma_gflop_per_s).
+// (measurement.limits: <backend>_copy_gb_per_s, <backend>_fma_gflop_per_s); for a fused pass also
+// fraction_of_copy_unfused, its speed counted as the unfused passes' bytes (unfused_gb_per_s).
 void add_roofline(nlohmann::json& points, const nlohmann::json& limits);
 
 // The summary's table: per method, variant, backend, precision and pass, the range over the run's

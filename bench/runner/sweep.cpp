@@ -368,6 +368,18 @@ nlohmann::json samples_json(const runner::PointRecord& rec) {
           {"measure_wall_s", rec.wall_s}};
 }
 
+// Taps and bytes a second of the passes' declared work (work.hpp) over their time; a fused pass's
+// speed counted as the unfused passes' bytes too (unfused_gb_per_s), where it keeps some.
+nlohmann::json pass_throughput(const std::vector<nlohmann::json>& passes, double ms) {
+  double taps = 0, bytes = 0, kept = 0;
+  for (const auto& w : passes)
+    taps += w["taps"].get<double>(), bytes += w["bytes_read"].get<double>() + w["bytes_written"].get<double>(),
+        kept += w.value("bytes_kept", 0.0);
+  nlohmann::json t = {{"taps_per_s", taps / (ms * 1e-3)}, {"gb_per_s", bytes / (ms * 1e6)}};
+  if (kept > 0) t["unfused_gb_per_s"] = (bytes + kept) / (ms * 1e6);
+  return t;
+}
+
 // The one serialisation of a measured point.
 nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, const PointInfo& info) {
   nlohmann::json out = identity_json(p);
@@ -379,19 +391,14 @@ nlohmann::json point_json(const SweepPoint& p, const runner::PointRecord& rec, c
   for (const auto& [pass, values] : pass_values) {
     const double median = runner::quantile(values, 0.5);
     pass_ms[pass] = median;
-    if (info.work.contains("passes") && info.work["passes"].contains(pass) && median > 0) {
-      const auto& w = info.work["passes"][pass];
-      throughput[pass] = {{"taps_per_s", w["taps"].get<double>() / (median * 1e-3)},
-                          {"gb_per_s", (w["bytes_read"].get<double>() + w["bytes_written"].get<double>()) / (median * 1e6)}};
-    }
+    if (info.work.contains("passes") && info.work["passes"].contains(pass) && median > 0)
+      throughput[pass] = pass_throughput({info.work["passes"][pass]}, median);
   }
   const double median_ms = out["frame_ms"]["median"].get<double>();
   if (p.backend == "cpu" && median_ms > 0) {  // the CPU reference is timed whole
-    double bytes = 0;
-    for (const auto& [pass, w] : info.work["passes"].items())
-      bytes += w["bytes_read"].get<double>() + w["bytes_written"].get<double>();
-    throughput["frame"] = {{"taps_per_s", info.work["taps"].get<double>() / (median_ms * 1e-3)},
-                           {"gb_per_s", bytes / (median_ms * 1e6)}};
+    std::vector<nlohmann::json> passes;
+    for (const auto& [pass, w] : info.work["passes"].items()) passes.push_back(w);
+    throughput["frame"] = pass_throughput(passes, median_ms);
   }
   out.update({          {"f_stop", info.f_stop},
           {"pass_ms", pass_ms},

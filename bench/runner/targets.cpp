@@ -66,6 +66,7 @@ nlohmann::json work_json(const std::vector<PassWork>& passes, double pixels) {
   double taps = 0;
   for (const auto& p : passes) {
     out["passes"][p.pass] = {{"taps", p.taps}, {"bytes_read", p.bytes_read}, {"bytes_written", p.bytes_written}};
+    if (p.bytes_kept > 0) out["passes"][p.pass]["bytes_kept"] = p.bytes_kept;
     taps += p.taps;
   }
   out["taps"] = taps;

@@ -55,7 +55,7 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
       const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
       work.push_back({"tile_max", lows, lows * 16, tiles * 16});
     }
-    work.push_back({"fused", 2 * lows * low.size_n, lows * 16, lows * 16});
+    work.push_back({"fused", 2 * lows * low.size_n, lows * 16, lows * 16, 2 * layer_bytes});
   } else if (c.streamed) {
     // Both passes band by band under one timestamp: the same taps and bytes, the layers through the
     // ring (which a GPU's L2 cache can hold) instead of a frame-sized buffer.
@@ -386,7 +386,7 @@ void declare_flag(std::vector<Method>& methods) {
     const double layer_bytes = pixels * flag_aperture_layers(o.aperture, c.pattern) * bytes_per_texel(c.precision);
     std::vector<PassWork> work = {{"shape_pack", pixels, pixels * 32, pixels * 16}};
     if (c.layer_buffer == FlagLayerBuffer::registers)  // both passes in one, no layers (flag_work)
-      work.push_back({"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 16});
+      work.push_back({"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 16, 2 * layer_bytes});
     else if (c.streamed)  // both passes band by band under one timestamp (flag_work)
       work.push_back({"streamed", 2 * pixels * c.pattern.size_n, pixels * 16 + layer_bytes, layer_bytes + pixels * 16});
     else
@@ -396,12 +396,14 @@ void declare_flag(std::vector<Method>& methods) {
   };
   // flag_blur (the disc at full resolution, per-value precisions) keeps each layer in its strip's
   // scratch, within a core's L2 (flag_blur_cpu_bytes): both passes' taps, the packed input read and the
-  // image (3 floats a pixel) written once. Every other CPU path moves its layers as the GPU passes do.
+  // image (3 floats a pixel) written once; it keeps what the whole-buffer path moves, the layers at
+  // the precision's texel. Every other CPU path moves its layers as the GPU passes do.
   m.cpu_work = [gpu_work = m.work](const FilterOptions& o, int w, int h) {
     const FlagConfig c = flag_config(o);
     if (cpu_path(o, c, w) != CpuPath::fused) return gpu_work(o, w, h);
     const double pixels = static_cast<double>(w) * h;
-    return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12}};
+    const double layer_bytes = pixels * c.pattern.layers() * bytes_per_texel(c.precision);
+    return std::vector<PassWork>{{"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 12, 2 * layer_bytes}};
   };
   m.gpu_memory = [](const FilterOptions& o, int w, int h, vk::Context* ctx) {
     // The layers as the device runs them (no device: the full buffer).

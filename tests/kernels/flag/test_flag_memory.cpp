@@ -61,6 +61,33 @@ TEST(FlagMemory, CpuWorkCountsNoLayerTraffic) {
   EXPECT_EQ(total(flag.cpu_work(o, 800, 600)).bytes_written, total(flag.work(o, 800, 600)).bytes_written);
 }
 
+// A fused pass keeps its layers in registers: what it keeps (bytes_kept, its speed counted as the
+// unfused passes' work) is what the two passes over the whole buffer write and read, for the disc the
+// paper's 332 MB at 1080p / 41x41 f16 each way, and for a shape its own layers.
+TEST(FlagMemory, FusedPassKeepsWhatTheUnfusedPassesMove) {
+  const Method& flag = find_method("flag");
+  const auto pass = [](const std::vector<PassWork>& passes, const std::string& name) {
+    for (const PassWork& p : passes)
+      if (p.pass == name) return p;
+    ADD_FAILURE() << "no pass " << name;
+    return PassWork{};
+  };
+  for (const std::string aperture : {"disc", "blades6", "blades5"}) {
+    FilterOptions fused = flag.defaults(k41), full = fused;
+    fused.aperture = full.aperture = parse_aperture(aperture);
+    fused.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+    full.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::full);
+    const auto unfused = flag.work(full, 1920, 1080);
+    const double layers_moved = pass(unfused, "horizontal").bytes_written + pass(unfused, "vertical").bytes_read;
+    EXPECT_EQ(pass(flag.work(fused, 1920, 1080), "fused").bytes_kept, layers_moved) << aperture;
+    EXPECT_EQ(pass(unfused, "horizontal").bytes_kept, 0) << aperture;
+    if (aperture == "disc") {
+      EXPECT_EQ(layers_moved, 2 * flag_paper_bytes(1920, 1080, k41, LayerPrecision::f16, 1));
+      EXPECT_EQ(pass(flag.cpu_work(fused, 1920, 1080), "fused").bytes_kept, layers_moved);  // the CPU's strips
+    }
+  }
+}
+
 // Streamed layers: the ring of B + 2 n k rows as the model sizes it and as the driver allocates it.
 // The goal at 1080p / 41x41 (k = 1) f16: <= 16 MiB on lavapipe's auto band (12 rows: 52 rows of
 // 1920 x 21 texels), against 332 MiB for the full buffer; explicit bands set the ring's rows.
