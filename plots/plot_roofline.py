@@ -6,8 +6,9 @@ usage: plot_roofline.py RESULTS_JSON OUT_PREFIX   (writes OUT_PREFIX.png and OUT
 plot_figure9.py and plot_tradeoff.py draw it as <prefix>_roofline.
 
 One panel per backend (its own probes). The slanted line is the copy probe's bandwidth (taps/s = GB/s x
-taps/byte), the flat one the FMA probe's rate at one vec4 multiply-add (8 FLOPs) a tap; a pass cannot sit
-above either. Each pass is one colour and marker, one point per N joined in N's order (the largest N
+taps/byte), the flat one the FMA probe's rate at one vec4 multiply-add (8 FLOPs) a tap. The copy probe reads
+and writes; a pass that mostly reads can pass its line where stores cost more than loads (lavapipe stores
+lane by lane: tile_max, which reads a frame and writes a few bytes, reaches 100-110% there). Each pass is one colour and marker, one point per N joined in N's order (the largest N
 labelled); the pass furthest below its nearer ceiling, listed first in the legend, is where time is lost.
 CPU references are timed whole ("frame"). A fused pass (FLAG's layers kept in registers) is drawn again in
 hollow markers at the taps per byte of the unfused passes' bytes (its layers written and read): its speed
