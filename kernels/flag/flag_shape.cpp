@@ -35,7 +35,7 @@ bool flag_layers_halved(const Aperture& aperture, const ShapeLattice& lattice) {
 std::uint64_t FlagShapeTable::bytes_for(const GatherPattern& pattern, int layers, bool scan) {
   const auto side = static_cast<std::uint64_t>(pattern.size_n), areas = side * side + 1;
   const auto groups = static_cast<std::uint64_t>((layers + 7) / 8);
-  return (scan ? areas * groups * kSectionInts : side * areas) * sizeof(std::int32_t);
+  return (scan ? areas * groups * kSectionInts : side * areas + side) * sizeof(std::int32_t);
 }
 
 FlagShapeTable::FlagShapeTable(const Aperture& aperture, const GatherPattern& pattern)
@@ -49,7 +49,7 @@ FlagShapeTable::FlagShapeTable(const Aperture& aperture, ShapeLattice shape_latt
   halved = flag_layers_halved(aperture, lattice);
   const int n = half_n, groups = layer_groups();
   const std::size_t offsets = static_cast<std::size_t>(side) * side, areas = offsets + 1;
-  chords.assign(static_cast<std::size_t>(side) * areas, 0);
+  chords.assign(static_cast<std::size_t>(side) * areas + side, 0);  // the chords, then reach
   const std::size_t area_ints = static_cast<std::size_t>(groups) * kSectionInts;
   sections.assign(areas * area_ints, 0);
   // Offsets in ascending gauge; each group of equal gauges joins at once: for every area m in the
@@ -111,6 +111,16 @@ FlagShapeTable::FlagShapeTable(const Aperture& aperture, ShapeLattice shape_latt
                 sections.begin() + static_cast<std::ptrdiff_t>(m * area_ints));
     group_start = group_end;
   }
+  // reach: the first area with a chord in each column, the smallest of it and the columns beyond.
+  std::int32_t* reach = chords.data() + static_cast<std::size_t>(side) * areas;
+  for (int column = 0; column < side; ++column) {
+    std::size_t m = 0;
+    while (m < areas && chords[static_cast<std::size_t>(column) * areas + m] == 0) ++m;
+    reach[column] = static_cast<std::int32_t>(m);
+  }
+  for (int d = n - 1; d >= 1; --d)  // from the edges in
+    reach[n - d] = std::min(reach[n - d], reach[n - d - 1]), reach[n + d] = std::min(reach[n + d], reach[n + d + 1]);
+  reach[n] = 0;
 }
 
 int flag_aperture_layers(const Aperture& aperture, const GatherPattern& pattern) {

@@ -35,6 +35,10 @@ namespace bokeh {
 // One load per sample and output column on the GPU: a search in per-column monotone tables would
 // cost log2(N) loads instead, each of which lavapipe turns into 8 scalar loads in the horizontal
 // pass's non-uniform control flow; the table is side x (side^2 + 1) ints (276 KiB at N = 41).
+// After them, side ints: reach(column), the smallest area whose chord is not 0 in that column or any
+// farther from the centre on its side (0 at the centre). A source whose area is below reach(column)
+// has no chord in that column nor beyond it: the fused pass skips, without changing a bit, the samples
+// that reach none of a subgroup's columns (one load for the nearest instead of a chord for each).
 //
 // The row sections, for the scan binning (horizontal_bins = scan, shaders/flag/horizontal_shape_scan.comp):
 // the lattice columns c whose chord for area m covers layer z (halved: hi >= z; both halves: lo <= z - n
@@ -60,6 +64,9 @@ struct FlagShapeTable {
   int layer_groups() const { return (layers() + 7) / 8; }
   std::int32_t chord(int column, int area) const {
     return chords[static_cast<std::size_t>(column) * (static_cast<std::size_t>(side) * side + 1) + area];
+  }
+  std::int32_t reach(int column) const {
+    return chords[static_cast<std::size_t>(side) * (static_cast<std::size_t>(side) * side + 1) + column];
   }
   // The row section of area m and layer z, and the union of group g's: packed as above.
   std::int32_t section(int area, int layer) const {

@@ -188,7 +188,10 @@ void main() {
           const int gap = max(max(first - s, s - last), 0);  // to the nearest of the subgroup's columns
 #if SHAPE
           const int index = int(coc_l);  // its row of the chord table
-          if (gap <= n) index_l = index;  // else no column's pattern holds it
+          // Else no column's pattern holds it, or its shape reaches neither the nearest of the
+          // subgroup's columns nor those beyond (the table's reach, after the chords).
+          const int side = 2 * n + 1, nearest = n - (s - clamp(s, first, last));
+          if (gap <= n && index >= chords[side * (side * side + 1) + nearest]) index_l = index;
 #else
           const int index = disc_index(coc_l * coc_l, k, 2 * n * n);
           // Else no column's pattern holds it, or its disc misses them.

@@ -204,6 +204,29 @@ TEST(FlagShape, AutoBinsAreScanWhereItWasMeasuredFasterOnCpuDevices) {
   }
 }
 
+// The chord table's reach against the lattice itself: a source of area m (its shape the offsets whose
+// gauge is at most the m-th smallest) holds an offset in lattice column c or beyond it (away from the
+// centre) exactly when m >= reach(c), so the fused pass's skip drops only samples without a chord.
+TEST(FlagShape, ReachIsTheFirstAreaHoldingTheColumnOrBeyond) {
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{15, 1}, GatherPattern{41, 2}})
+    for (const Shape& shape : kShapes) {
+      SCOPED_TRACE(std::string(shape.name) + " N " + std::to_string(pattern.size_n));
+      const FlagShapeTable table(parse_aperture(shape.name), pattern);
+      const int n = pattern.half(), side = pattern.size_n;
+      EXPECT_EQ(table.reach(n), 0);
+      for (int c = 0; c < side; ++c)
+        for (int m = 1; m <= side * side; ++m) {
+          const float within = table.lattice.sorted[static_cast<std::size_t>(m) - 1];
+          bool holds = false;
+          for (int j = 0; j < side && !holds; ++j)
+            for (int c2 = 0; c2 < side && !holds; ++c2)
+              holds = (c < n ? c2 <= c : c > n ? c2 >= c : true) &&
+                      table.lattice.gauge[static_cast<std::size_t>(j) * side + c2] <= within;
+          ASSERT_EQ(m >= table.reach(c), holds) << "column " << c - n << " area " << m;
+        }
+    }
+}
+
 // The row sections against the chords they come from: for every area and layer, lattice column c is
 // in the section exactly when its chord covers the layer (halved: hi >= z; both halves: lo <= z - n
 // <= hi), and each group's union is the hull of its sections.
@@ -350,8 +373,9 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
   const MemoryUse indexed_model = flag.gpu_memory(indexed, 1920, 1080, nullptr);
   const MemoryUse scan_model = flag.gpu_memory(scan, 1920, 1080, nullptr);
   EXPECT_EQ(scan_model.details["horizontal_table"], "row sections");
-  // 41 layers: 6 groups of 48 bytes per area, against 41 columns of 4 bytes.
-  EXPECT_EQ(scan_model.bytes - indexed_model.bytes, (41ull * 41 + 1) * (6 * 48 - 41 * 4));
+  // 41 layers: 6 groups of 48 bytes per area, against 41 columns of 4 bytes and the chords' reach
+  // (an int a column).
+  EXPECT_EQ(scan_model.bytes - indexed_model.bytes, (41ull * 41 + 1) * (6 * 48 - 41 * 4) - 41 * 4);
 
   const Scene s = make_scene("hoops", 61, 45);
   for (const char* name : {"blades5", "blades6"})
