@@ -61,12 +61,12 @@ std::uint64_t CocTilesGpu::bytes(int width_px, int height_px, int tile_px) {
 }
 
 CocTilesGpu::CocTilesGpu(vk::Context& ctx, const vk::Buffer& packed, std::uint32_t width_px, std::uint32_t height_px,
-                         int spacing_px, int tile_px)
+                         int spacing_px, int tile_px, bool areas)
     : ctx_(ctx),
       tile_px_(tile_px),
       buffer_(vk::make_storage_buffer(ctx, bytes(static_cast<int>(width_px), static_cast<int>(height_px), tile_px),
                                       "tile-max CoC map")),
-      tile_max_(ctx, vk::spirv("common/tile_max"), {kBuffer, kBuffer}, sizeof(PassParams), {spacing_px, tile_px}),
+      tile_max_(ctx, vk::spirv("common/tile_max"), {kBuffer, kBuffer}, sizeof(PassParams), {spacing_px, tile_px, areas}),
       tile_reach_(ctx, vk::spirv("common/tile_reach"), {kBuffer}, sizeof(PassParams), {spacing_px, tile_px}) {
   tile_max_.bind(0, packed);
   tile_max_.bind(1, buffer_);

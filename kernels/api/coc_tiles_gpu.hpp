@@ -37,9 +37,10 @@ namespace gpu {
 class CocTilesGpu {
  public:
   // Over a width x height grid (the frame's, or FLAG's reduced one) whose packed input (rgb / area,
-  // radius) is `packed`.
+  // radius) is `packed`. `areas`: the input's .a is a polygon's area (FLAG's shape_pack), and M the
+  // tiles' largest area (tile_max only).
   CocTilesGpu(vk::Context& ctx, const vk::Buffer& packed, std::uint32_t width_px, std::uint32_t height_px,
-              int spacing_px, int tile_px);
+              int spacing_px, int tile_px, bool areas = false);
 
   // Records the reset of the scene maximum, then tile_max and tile_reach over `grid` (its region,
   // n and k), each stamped with its name when `timer` is given.

@@ -190,7 +190,7 @@ bool flag_runs_registers(const FilterOptions& options, const vk::DeviceInfo& dev
   return true;
 }
 
-bool flag_fused_reads_tile_map(int layers) { return layers >= 13; }
+bool flag_fused_reads_tile_map(int layers, bool shape) { return layers >= (shape ? 15 : 13); }
 
 std::uint32_t flag_fused_invocations_x(int width_px, int spacing_px) {
   const auto k = static_cast<std::uint32_t>(spacing_px);

@@ -102,10 +102,12 @@ std::uint32_t flag_fused_invocations_x(int width_px, int spacing_px);
 // The tile-max CoC map's tile side in px for the disc's fused pass, which loads of a row only the
 // samples of the tiles that can reach its columns: a tile of 16 px is one batch of 8 columns at k = 2.
 inline constexpr int kFlagFusedTilePx = 16;
-// Whether the disc's fused pass of `layers` layers reads the map (its pass tile_max runs): from 13
-// layers (N = 25) on. Below, the map's pass costs more than the loads it saves on lavapipe (800x600
-// hoops, f16: 1.23x / 1.09x the frame at N = 9 / 13, the same at 21, 0.94 at 33; results/README.md).
-bool flag_fused_reads_tile_map(int layers);
+// Whether the fused pass of a pattern of `layers` = (N + 1) / 2 layers reads the map (its pass tile_max
+// runs): the disc's from 13 layers (N = 25) on, a polygon's (a map of areas) from 15 (N = 29). Below,
+// the map's pass costs more than the loads it saves on lavapipe (800x600 hoops, f16: the disc 1.23x /
+// 1.09x the frame at N = 9 / 13, the same at 21, 0.94 at 33; blades5 1.023-1.026x at N = 25, 0.976 at
+// 29; results/README.md).
+bool flag_fused_reads_tile_map(int layers, bool shape = false);
 // Output rows per band as run: `requested` (> 0, the option band_rows), or auto's (0): the largest
 // band whose ring fits kFlagStreamBudgetBytes of the device kind, and at least kFlagStreamMinBand
 // rows. `reach_rows` = n k of FLAG's grid, `row_bytes` = one row of layers (width x layers x texel).

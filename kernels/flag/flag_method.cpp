@@ -229,7 +229,9 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
   const std::uint64_t weighted = static_cast<std::uint64_t>(w) * h * 16,
                       tables = c.pattern.samples_per_pixel() * sizeof(float) +
                                FlagShapeTable::bytes_for(c.pattern, layer_count, scan);
-  use.bytes = layers + weighted + tables;
+  // Registers: the map of areas the fused pass reads (made whether or not it is read).
+  const std::uint64_t map = registers ? gpu::CocTilesGpu::bytes(w, h, kFlagFusedTilePx) : 0;
+  use.bytes = layers + weighted + tables + map;
   use.details = {{"extent", {{"width", e.width}, {"height", e.height}, {"layers", e.layers}}},
                  {"bytes_per_texel", bytes_per_texel(c.precision)},
                  {"layer_buffer_bytes", layers},
@@ -238,7 +240,8 @@ MemoryUse flag_shape_gpu_memory(const FlagConfig& c, const Aperture& aperture, i
                  {"layer_halves", halved ? 1 : 2},
                  {"horizontal_table", scan ? "row sections" : "chords"},
                  {"paper_convention_bytes", static_cast<double>(texels)},
-                 {"other_bytes", weighted + tables}};
+                 {"tile_map_bytes", map},
+                 {"other_bytes", weighted + tables + map}};
   if (c.streamed) use.details["streamed"] = {{"band_rows", ring.band_rows}, {"ring_rows", e.height}};
   return use;
 }
@@ -297,7 +300,7 @@ std::vector<OptionSpec> flag_options() {
            "(B = --band-rows output rows a band), the two passes alternating per band in one command buffer: "
            "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
            "fused, each invocation walking down a column with the layers in registers (buffer scale 1, f32 or "
-           "f16, adaptive off; the disc loads only the row samples the tile-max CoC map lets reach its columns): "
+           "f16, adaptive off; loading only the row samples the tile-max CoC map lets reach its columns): "
            "the CPU reference's image bit for bit, for CPU devices (lavapipe stores and loads a texel lane by "
            "lane); auto (the default): registers where it runs on a CPU device, any aperture, "
            "else full",
@@ -385,13 +388,18 @@ void declare_flag(std::vector<Method>& methods) {
     const double pixels = static_cast<double>(w) * h;
     const double layer_bytes = pixels * flag_aperture_layers(o.aperture, c.pattern) * bytes_per_texel(c.precision);
     std::vector<PassWork> work = {{"shape_pack", pixels, pixels * 32, pixels * 16}};
-    if (c.layer_buffer == FlagLayerBuffer::registers)  // both passes in one, no layers (flag_work)
+    if (c.layer_buffer == FlagLayerBuffer::registers) {  // both passes in one, no layers (flag_work)
+      if (flag_fused_reads_tile_map(c.pattern.layers(), true)) {  // the map of areas, as the disc's of disc indices
+        const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
+        work.push_back({"tile_max", pixels, pixels * 16, tiles * 16});
+      }
       work.push_back({"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 16, 2 * layer_bytes});
-    else if (c.streamed)  // both passes band by band under one timestamp (flag_work)
+    } else if (c.streamed) {  // both passes band by band under one timestamp (flag_work)
       work.push_back({"streamed", 2 * pixels * c.pattern.size_n, pixels * 16 + layer_bytes, layer_bytes + pixels * 16});
-    else
+    } else {
       work.insert(work.end(), {{"horizontal", pixels * c.pattern.size_n, pixels * 16, layer_bytes},
                                {"vertical", pixels * c.pattern.size_n, layer_bytes, pixels * 16}});
+    }
     return work;
   };
   // flag_blur (the disc at full resolution, per-value precisions) keeps each layer in its strip's

@@ -10,6 +10,7 @@
 #include <string>
 #include <stdexcept>
 
+#include "coc_tiles_gpu.hpp"
 #include "flag_config.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
@@ -72,12 +73,15 @@ class FlagShape final : public gpu::GpuFilter {
     const std::string precision = to_string(config.precision);
     if (registers) {
       // layer_buffer = registers (shaders/flag/fused.comp with SHAPE): constant ids 0 LAYERS, 2 SPACING,
-      // 5 MASKED_BINS, 8 BOTH_HALVES; a workgroup is 8 columns of a lattice phase.
+      // 5 MASKED_BINS, 6 TILE_PX, 7 TILE_MAP, 8 BOTH_HALVES; a workgroup is 8 columns of a lattice
+      // phase. The tile map holds shape_pack's areas (flag_fused_reads_tile_map: from 15 layers on).
+      tiles_.emplace(frame.ctx, weighted_, frame.width(), frame.height(), config.pattern.spacing_px,
+                     kFlagFusedTilePx, true);
       fused_.emplace(frame.ctx, vk::spirv("flag/fused_shape_" + precision),
-                     std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
+                     std::vector<VkDescriptorType>{kBuffer, kBuffer, kBuffer, kBuffer}, sizeof(gpu::PassParams),
                      std::vector<std::int32_t>{table_.layers(), 0, config.pattern.spacing_px, 0, 0,
-                                               bins_ == FlagHorizontalBins::masked, 0, 0,
-                                               !table_.halved},
+                                               bins_ == FlagHorizontalBins::masked, kFlagFusedTilePx,
+                                               reads_tile_map(), !table_.halved},
                      vk::LocalSize{8, 1});
     } else {
       layers_.emplace(frame.ctx, layer_format(config.precision), static_cast<std::uint32_t>(frame.width()),
@@ -118,6 +122,7 @@ class FlagShape final : public gpu::GpuFilter {
       fused_->bind(0, weighted_);
       fused_->bind(1, frame.output);
       fused_->bind(2, table_buffer_);
+      fused_->bind(3, tiles_->buffer());
       return;
     }
     horizontal_->bind(0, weighted_);
@@ -134,6 +139,7 @@ class FlagShape final : public gpu::GpuFilter {
     pack_.dispatch(cmd, &params, w, h);
     timer.end_pass(cmd, "shape_pack");
     if (fused_) {  // as the disc's (flag_gpu.cpp): one workgroup per 8 columns of a phase
+      if (reads_tile_map()) tiles_->record_max(cmd, &timer, params);
       fused_->dispatch(cmd, &params, flag_fused_invocations_x(params.width_px, params.spacing_px),
                        static_cast<std::uint32_t>(params.spacing_px));
       timer.end_pass(cmd, "fused");
@@ -169,13 +175,14 @@ class FlagShape final : public gpu::GpuFilter {
 
   std::uint64_t intermediate_bytes() const override {
     return (layers_ ? layers_->allocated_bytes() : 0) + weighted_.allocated_bytes() + sorted_.allocated_bytes() +
-           table_buffer_.allocated_bytes();
+           table_buffer_.allocated_bytes() + (tiles_ ? tiles_->allocated_bytes() : 0);
   }
 
  private:
   gpu::GpuFrame& frame_;
   FlagShapeTable table_;
   bool scan() const { return bins_ == FlagHorizontalBins::scan; }
+  bool reads_tile_map() const { return flag_fused_reads_tile_map(table_.half_n + 1, true); }
   // LAYER_ROWS (shaders/flag/layer_rows.glsl): the ring's rows, or 0 for the full buffer.
   std::int32_t layer_ring_rows() const { return streamed_ ? rows_.extent.height : 0; }
 
@@ -187,6 +194,7 @@ class FlagShape final : public gpu::GpuFilter {
   vk::ComputePipeline pack_;
   std::optional<vk::StorageImage3D> layers_;                    // the 3D buffer's passes
   std::optional<vk::ComputePipeline> horizontal_, vertical_;
+  std::optional<gpu::CocTilesGpu> tiles_;                       // the fused pass's map of areas
   std::optional<vk::ComputePipeline> fused_;                    // layer_buffer = registers
 };
 

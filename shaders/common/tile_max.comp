@@ -6,6 +6,9 @@
 #include "common.glsl"
 
 layout(constant_id = 0) const int SPACING = 1;  // k, a constant divisor for disc_index
+// The input's .a is a polygon's area (shape_pack's chord-table row, FLAG's fused pass for shapes):
+// M is then the tile's largest area, not a disc index.
+layout(constant_id = 2) const bool AREAS = false;
 #define TILE_PX_ID 1
 #define TILES_BINDING 1
 #define TILES_ACCESS writeonly
@@ -23,7 +26,7 @@ void main() {
   for (int y = lo.y; y < hi.y; ++y)
     for (int x = lo.x; x < hi.x; ++x) {
       const float r = packed_input[index_of(ivec2(x, y))].a;
-      m = max(m, disc_index(r * r, SPACING, cap));
+      m = max(m, AREAS ? int(r) : disc_index(r * r, SPACING, cap));
     }
   tiles[tile_element(t)].x = m;
 }

@@ -13,9 +13,10 @@
 // values in the same order as vertical.comp, each layer first rounded to f16 (QUANTIZE_F16, to nearest
 // as the CPU reference rounds; lavapipe's f16 image store rounds toward zero, which Vulkan also
 // allows): the CPU reference's image bit for bit, and f32 the full buffer's with indexed bins.
-// The disc's row samples are loaded only in the windows of columns that the tile-max CoC map (pass
-// tile_max) says can reach the workgroup's columns (reaching_windows): in a scene mostly in focus, a
-// fraction of the row (results/README.md, "Loading only the samples that can reach").
+// The row samples are loaded only in the windows of columns that the tile-max CoC map (pass tile_max)
+// says can reach the workgroup's columns (reaching_windows): in a scene mostly in focus, a fraction of
+// the row (results/README.md, "Loading only the samples that can reach"). A polygon's map holds areas,
+// tested against the chord table's reach.
 // Work per pixel: up to N row samples, each loaded once by one lane and handed to the lanes whose pattern
 // holds it (lane_batch.glsl), one indexed bin add each (a load and a store per lane on lavapipe) or a
 // masked add per layer in registers (MASKED_BINS, while the layers are few: flag_registers_masked), a
@@ -36,18 +37,21 @@ layout(constant_id = 2) const int SPACING = 2;  // k, a constant divisor for dis
 layout(constant_id = 8) const bool BOTH_HALVES = false;
 layout(std430, binding = 2) readonly buffer Chords { int chords[]; };  // FlagShapeTable::chords
 const int HALF = BOTH_HALVES ? (LAYERS - 1) / 2 : LAYERS - 1;          // n
-const bool TILE_MAP = false;  // a chord-table index is not a disc index
+// The smallest area that reaches lattice column `column` or beyond (the table's reach, after the chords).
+int reach_area(int column) { return chords[(2 * HALF + 1) * ((2 * HALF + 1) * (2 * HALF + 1) + 1) + column]; }
+#define TILES_BINDING 3
 #else
 const bool BOTH_HALVES = false;
 const int HALF = LAYERS - 1;
-// The tile-max CoC map's M (kernels/core/coc_tiles.hpp, pass tile_max only): which of a row's samples
-// can reach the workgroup's columns, so that a row of samples mostly in focus loads few of them. Read
-// from 13 layers on (flag_fused_reads_tile_map): below, its pass costs more than the loads it saves.
+#define TILES_BINDING 2
+#endif
+// The tile-max CoC map's M (kernels/core/coc_tiles.hpp, pass tile_max only; a polygon's: the largest
+// area): which of a row's samples can reach the workgroup's columns, so that a row of samples mostly in
+// focus loads few of them. Read from 13 layers on, a polygon's from 15 (flag_fused_reads_tile_map):
+// below, its pass costs more than the loads it saves.
 layout(constant_id = 7) const bool TILE_MAP = true;
 #define TILE_PX_ID 6
-#define TILES_BINDING 2
 #include "tiles.glsl"
-#endif
 // The bins as horizontal_bins = masked (layers.glsl): every bin tests its own range of the sample's
 // disc index and adds the sample or -0.0 (which leaves every sum as it is), no dynamically indexed
 // array, which lavapipe turns into a load and a store per lane: cheaper while the layers are few.
@@ -103,10 +107,9 @@ uvec2 every_window(int window0, int last, ivec2 batch) {
   const int windows = (last + HALF - window0) / batch.x + 1;
   return uvec2(windows >= 32 ? ~0u : (1u << windows) - 1u, windows >= 64 ? ~0u : (1u << max(windows - 32, 0)) - 1u);
 }
-#if !SHAPE
 // In the rows of tile row tile_y, where the largest disc index M of the tiles under the window reaches
-// the nearest of those columns (gap^2 <= M): the samples outside add nothing. Each lane tests every
-// batch.x-th window.
+// the nearest of those columns (gap^2 <= M; a polygon: M at least the reach of the column from the
+// window's nearest sample): the samples outside add nothing. Each lane tests every batch.x-th window.
 uvec2 reaching_windows(int window0, int first, int last, ivec2 batch, int tile_y, int phase_x, int columns) {
   const int n = HALF, k = SPACING, windows = (last + n - window0) / batch.x + 1;
   uvec2 bits = uvec2(0u);
@@ -118,12 +121,17 @@ uvec2 reaching_windows(int window0, int first, int last, ivec2 batch, int tile_y
     if (j < windows && a <= b)
       for (int tile_x = (phase_x + a * k) / TILE_PX; tile_x <= (phase_x + b * k) / TILE_PX; ++tile_x)
         m = max(m, tiles[tile_element(ivec2(tile_x, tile_y))].x);
-    const uint lanes = subgroupBallot(m >= gap * gap).x << (j0 % 32);  // batch.x divides 32
+#if SHAPE
+    // Table column n - i of the offset i = sample - column from the window's nearest sample.
+    const bool reaches = m >= reach_area(b < first ? n + first - b : (a > last ? n - a + last : n));
+#else
+    const bool reaches = m >= gap * gap;
+#endif
+    const uint lanes = subgroupBallot(reaches).x << (j0 % 32);  // batch.x divides 32
     bits |= j0 < 32 ? uvec2(lanes, 0u) : uvec2(0u, lanes);
   }
   return bits;
 }
-#endif
 
 void main() {
   const int n = HALF, k = SPACING;
@@ -161,15 +169,10 @@ void main() {
   // windows then lie in as few tiles as can be, one more window at most).
   const int window0 = first - n - (TILE_MAP ? ((first - n) % batch.x + batch.x) % batch.x : 0);
   for (int t = 0; t < rows;) {  // a tile row of the map at a time
-#if SHAPE
-    const uvec2 windows = every_window(window0, last, batch);
-    const int rows_here = rows;
-#else
     const int tile_y = (phase_y + t * k) / TILE_PX;
     const uvec2 windows = TILE_MAP ? reaching_windows(window0, first, last, batch, tile_y, phase_x, columns)
                                    : every_window(window0, last, batch);
     const int rows_here = TILE_MAP ? min(rows, ((tile_y + 1) * TILE_PX - phase_y + k - 1) / k) : rows;
-#endif
     for (; t < rows_here; ++t) {
       const int y = phase_y + t * k;
       if (MASKED_BINS) {
@@ -190,8 +193,7 @@ void main() {
           const int index = int(coc_l);  // its row of the chord table
           // Else no column's pattern holds it, or its shape reaches neither the nearest of the
           // subgroup's columns nor those beyond (the table's reach, after the chords).
-          const int side = 2 * n + 1, nearest = n - (s - clamp(s, first, last));
-          if (gap <= n && index >= chords[side * (side * side + 1) + nearest]) index_l = index;
+          if (gap <= n && index >= reach_area(n - (s - clamp(s, first, last)))) index_l = index;
 #else
           const int index = disc_index(coc_l * coc_l, k, 2 * n * n);
           // Else no column's pattern holds it, or its disc misses them.

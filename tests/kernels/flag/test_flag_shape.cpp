@@ -2,6 +2,7 @@
 // naive's direct shape test per sample (naive_shape_gather), the light every source conserves, its
 // own CPU reference on the GPU, and the driver's allocation against the memory model.
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <utility>
 
 #include "aperture.hpp"
+#include "coc_tiles_gpu.hpp"
 #include "flag.hpp"
 #include "flag_gpu.hpp"
 #include "flag_shape.hpp"
@@ -397,6 +399,28 @@ TEST(FlagShape, MemoryModelDeclaresBothHalvesAndMatchesTheDriver) {
       EXPECT_GE(filter->intermediate_bytes(), model.bytes) << name << " bins " << bins;
       EXPECT_LE(filter->intermediate_bytes(), model.bytes + 3 * 256) << name << " bins " << bins;
     }
+  // In registers: no layers, the chord table and the fused pass's map of areas (made whether or not it
+  // is read), which its pass tile_max fills from 15 layers on; the driver's bytes as the model's.
+  for (const GatherPattern pattern : {GatherPattern{9, 2}, GatherPattern{41, 2}}) {
+    FilterOptions o = buffer_defaults(pattern);
+    o.aperture = parse_aperture("blades6");
+    o.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+    Lens lens = s.lens;
+    lens.aperture = o.aperture;
+    gpu::GpuFrame frame(context(), s.color, s.depth_m, lens, o.pattern);
+    const auto filter = flag.make_gpu(frame, o);
+    const MemoryUse model = flag.gpu_memory(o, 61, 45, &context());
+    EXPECT_EQ(model.details["layer_buffer_bytes"], 0);
+    EXPECT_EQ(model.details["tile_map_bytes"], gpu::CocTilesGpu::bytes(61, 45, kFlagFusedTilePx));
+    EXPECT_GE(filter->intermediate_bytes(), model.bytes) << pattern.size_n;
+    EXPECT_LE(filter->intermediate_bytes(), model.bytes + 4 * 256) << pattern.size_n;
+    std::vector<std::string> passes;
+    for (const PassWork& p : flag.work(o, 61, 45)) passes.push_back(p.pass);
+    const std::vector<std::string> modelled = pattern.size_n == 41
+                                                  ? std::vector<std::string>{"shape_pack", "tile_max", "fused"}
+                                                  : std::vector<std::string>{"shape_pack", "fused"};
+    EXPECT_EQ(passes, modelled);
+  }
 }
 
 // The GPU against the CPU reference, every per-value precision, horizontal block and the scan binning,
@@ -432,7 +456,7 @@ TEST(FlagShape, GpuMatchesCpuReference) {
 // the CPU reference's image bit for bit (f32 and f16: the same chords and layer values, each rounded to
 // nearest, summed in the same order), halved shapes and both halves, indexed and masked bins (41 layers
 // of blades5 at N = 41: the indexed bins' row marks in a second word); and no layer buffer, one fused
-// pass after shape_pack.
+// pass after shape_pack (and the map of areas, tile_max, where it is read).
 TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
   const Method& flag = find_method("flag");
   const Scene s = make_scene("hoops", 63, 46);
@@ -450,9 +474,11 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
           o.values["horizontal_bins"] = static_cast<double>(bins);
           ASSERT_EQ(flag.unsupported(o, 63, 46), "");
           const auto [cpu, gpu, passes] = run_cpu_and_gpu(s, o);
-          ASSERT_EQ(passes.size(), 3u);
+          const bool map = flag_fused_reads_tile_map(pattern.layers(), true);
+          ASSERT_EQ(passes.size(), map ? 4u : 3u);
           EXPECT_EQ(passes[1].pass, "shape_pack");
-          EXPECT_EQ(passes[2].pass, "fused");
+          if (map) EXPECT_EQ(passes[2].pass, "tile_max");
+          EXPECT_EQ(passes.back().pass, "fused");
           EXPECT_TRUE(test::same_bits(gpu, cpu));
         }
   FilterOptions o = flag.defaults({41, 2});
@@ -465,6 +491,46 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
   r11.precision = "r11g11b10f";
   const Lens lens = shape_lens(s, r11.pattern, r11.aperture);
   EXPECT_THROW(run_gpu(context(), flag, s.color, s.depth_m, lens, r11), std::invalid_argument);
+}
+
+// A polygon's fused pass loads a row's samples only in the windows whose tiles' largest area reaches
+// the workgroup's nearest column (the map of shape_pack's areas against the chord table's reach): in
+// scenes mostly in focus most windows are left out, and the image stays the full buffer's with indexed
+// bins bit for bit (f32: the same layer values summed in the same order; against the GPU's own
+// shape_pack, whose division the CPU's may round otherwise in these scenes), for k = 1, 2 and 3, a halved
+// shape (blades6) and both halves (blades5), masked and indexed bins. Below 15 layers (N = 21) the map
+// is not made and every window is loaded.
+TEST(FlagShape, RegistersLoadOnlyTheSamplesTheAreaMapLetsReach) {
+  const Method& flag = find_method("flag");
+  for (const std::string scene : {"mostly_in_focus", "points", "half_defocused"})
+    for (const GatherPattern pattern : {GatherPattern{81, 2}, GatherPattern{41, 1}, GatherPattern{33, 3},
+                                        GatherPattern{21, 2}})
+      for (const char* name : {"blades5", "blades6"}) {
+        const Scene s = make_scene(scene, 160, 40);
+        FilterOptions full = flag.defaults(pattern);
+        full.precision = "f32";
+        full.aperture = parse_aperture(name);
+        full.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::full);
+        full.values["horizontal_bins"] = static_cast<double>(FlagHorizontalBins::indexed);
+        const Lens lens = shape_lens(s, pattern, full.aperture);
+        const Image expected = run_gpu(context(), flag, s.color, s.depth_m, lens, full);
+        for (const auto bins : {FlagHorizontalBins::indexed, FlagHorizontalBins::masked}) {
+          SCOPED_TRACE(fmt::format("{} N {} k {} {} {}", scene, pattern.size_n, pattern.spacing_px, name,
+                                   flag_horizontal_bins()[static_cast<std::size_t>(bins)]));
+          FilterOptions registers = full;
+          registers.values["layer_buffer"] = static_cast<double>(FlagLayerBuffer::registers);
+          registers.values["horizontal_bins"] = static_cast<double>(bins);
+          std::vector<vk::PassTime> passes;
+          const Image output = run_gpu(context(), flag, s.color, s.depth_m, lens, registers, &passes);
+          std::vector<std::string> names;
+          for (const auto& p : passes) names.push_back(p.pass);
+          const std::vector<std::string> stamped =
+              flag_fused_reads_tile_map(pattern.layers(), true) ? std::vector<std::string>{"coc", "shape_pack", "tile_max", "fused"}
+                                                          : std::vector<std::string>{"coc", "shape_pack", "fused"};
+          EXPECT_EQ(names, stamped);
+          EXPECT_TRUE(test::same_bits(output, expected));
+        }
+      }
 }
 
 // Masked bins (a compare per bin instead of an indexed add) add the same values to the same bins: the
