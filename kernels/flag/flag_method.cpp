@@ -26,6 +26,13 @@ namespace bokeh::methods {
 
 namespace {
 
+// The fused pass's tile map (pass tile_max): reads every pixel's radius or area, writes an M a tile.
+PassWork fused_tile_max_work(int w, int h) {
+  const double pixels = static_cast<double>(w) * h;
+  const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
+  return {"tile_max", pixels, pixels * 16, tiles * 16};
+}
+
 std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   const int s = c.buffer_scale;
   const GatherPattern low = reduced_pattern(c.pattern, s);
@@ -51,10 +58,7 @@ std::vector<PassWork> flag_work(const FlagConfig& c, int w, int h) {
   if (c.layer_buffer == FlagLayerBuffer::registers) {  // as on_device resolves auto
     // The tile map's M (tile_max reads every radius), which bounds the row samples the fused pass
     // loads; then both passes in one dispatch: the same taps as a bound, and no layer leaves registers.
-    if (flag_fused_reads_tile_map(low.layers())) {
-      const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
-      work.push_back({"tile_max", lows, lows * 16, tiles * 16});
-    }
+    if (flag_fused_reads_tile_map(low.layers())) work.push_back(fused_tile_max_work(w, h));
     work.push_back({"fused", 2 * lows * low.size_n, lows * 16, lows * 16, 2 * layer_bytes});
   } else if (c.streamed) {
     // Both passes band by band under one timestamp: the same taps and bytes, the layers through the
@@ -389,10 +393,7 @@ void declare_flag(std::vector<Method>& methods) {
     const double layer_bytes = pixels * flag_aperture_layers(o.aperture, c.pattern) * bytes_per_texel(c.precision);
     std::vector<PassWork> work = {{"shape_pack", pixels, pixels * 32, pixels * 16}};
     if (c.layer_buffer == FlagLayerBuffer::registers) {  // both passes in one, no layers (flag_work)
-      if (flag_fused_reads_tile_map(c.pattern.layers(), true)) {  // the map of areas, as the disc's of disc indices
-        const double tiles = static_cast<double>(ceil_div(w, kFlagFusedTilePx)) * ceil_div(h, kFlagFusedTilePx);
-        work.push_back({"tile_max", pixels, pixels * 16, tiles * 16});
-      }
+      if (flag_fused_reads_tile_map(c.pattern.layers(), true)) work.push_back(fused_tile_max_work(w, h));  // areas
       work.push_back({"fused", 2 * pixels * c.pattern.size_n, pixels * 16, pixels * 16, 2 * layer_bytes});
     } else if (c.streamed) {  // both passes band by band under one timestamp (flag_work)
       work.push_back({"streamed", 2 * pixels * c.pattern.size_n, pixels * 16 + layer_bytes, layer_bytes + pixels * 16});
