@@ -184,8 +184,11 @@ def baseline_rows(doc, frame, context, gpu):
     parts = []
     for n in picks:
         w, r = wall[n], lead[n]
+        busy = (f" (cores busy: FLAG {r['flag_cores_busy']:.2f}, the baseline {r['baseline_cores_busy']:.2f})"
+                if "flag_cores_busy" in r else "")
         parts.append(f"N = {n}: {interval(w['flag_over_baseline'], w['low'], w['high'], 2, 'x')} wall-clock; "
-                     f"{interval(r['flag_over_baseline'], r['low'], r['high'], 2, 'x')} in {r.get('time', 'its time')}")
+                     f"{interval(r['flag_over_baseline'], r['low'], r['high'], 2, 'x')} in {r.get('time', 'its time')}"
+                     f"{busy}")
     label = baselines[picks[0]].get("label", picks[0]) if picks and picks[0] in baselines else "the CPU baseline"
     version = baselines[picks[0]].get("opencv", "") if picks and picks[0] in baselines else ""
     device = f"{gpu} / the CPU ({label} {version})".strip()

@@ -5,6 +5,7 @@ usage: check_results.py gbench|adaptive|injected|intervals|figure9|roofline FILE
 """
 import json
 import math
+import statistics
 import sys
 
 
@@ -329,7 +330,12 @@ def check_baselines(d, field, software):
         assert b["reason"], b
     variant = figure_variant(d)
     flag_n = {p["N"] for p in d["points"] if p["method"] == "flag" and not variant(p) and p["backend"] == "gpu"}
-    checked = 0
+    flag_at = {p["N"]: p for p in d["points"] if p["method"] == "flag" and not variant(p) and p["backend"] == "gpu"}
+
+    def cores_busy(p):  # process CPU time over wall-clock time, medians over the samples
+        return statistics.median(p["samples_cpu_ms"]) / statistics.median(p["samples_ms"])
+
+    checked = busy = 0
     for figures, lead in ((d, True), (d["headlines"]["wall_time"], False)):
         time = "process CPU time" if lead and software else "wall-clock time"
         processes, _ = widened_by_processes(d, lead)
@@ -344,12 +350,17 @@ def check_baselines(d, field, software):
             assert all(close(g, w, T_TABLE_CLOSE) for g, w in zip(got, (est, low, high))), (r, (est, low, high))
             assert close(r["repeat_low"], est - math.sqrt(2) * (est - low), T_TABLE_CLOSE), r
             assert close(r["repeat_high"], est + math.sqrt(2) * (high - est), T_TABLE_CLOSE), r
+            if "flag_cores_busy" in r:  # absent in files from before 2026-12-06
+                assert close(r["flag_cores_busy"], cores_busy(flag_at[n])), (r, cores_busy(flag_at[n]))
+                assert close(r["baseline_cores_busy"], cores_busy(measured[n])), (r, cores_busy(measured[n]))
+                busy += 1
             checked += 1
         for s in figures["baseline_series"]:
             assert s["time"] == time, (s, time)
             for n, median in zip(s["N"], s["median_ms"]):
                 assert close(median, median_interval(measured[int(n)][field[time]])[0]), (s["baseline"], n)
-    return f"{len(measured)} measured, {len(skipped)} skipped, {checked} FLAG/baseline ratios check against the samples"
+    return f"{len(measured)} measured, {len(skipped)} skipped, {checked} FLAG/baseline ratios check against the " \
+           f"samples ({busy} with cores busy)"
 
 
 def roofline(d):

@@ -164,6 +164,16 @@ const RoundValues& values_of(const RoundPoint& p, Metric metric) {
 }
 const char* time_of(const RoundPoint& p, Metric metric) { return time_name(metric == Metric::lead && p.cpu_time_leads); }
 
+// The cores a point kept busy: its process CPU time over its wall-clock time, medians over its rounds.
+// lavapipe spreads FLAG over its threads where OpenCV's DFT path keeps to about one core, so a host's
+// slow phase moves the two sides of FLAG / baseline differently (results/README.md).
+double cores_busy(const RoundPoint& p) {
+  std::vector<double> cpu, wall;
+  for (const auto& [round, ms] : p.cpu_ms) cpu.push_back(ms);
+  for (const auto& [round, ms] : p.wall_ms) wall.push_back(ms);
+  return cpu.empty() || wall.empty() ? 0.0 : runner::quantile(cpu, 0.5) / runner::quantile(wall, 0.5);
+}
+
 // The growth exponent of `curve` (one point per n) over its points from `from` on: fitted to each
 // round's own curve, then the median over rounds. A round's points are measured within seconds of
 // each other, so a slow phase of the machine (this VM ran 1.3-1.5x slower for 12 of 27 rounds)
@@ -414,7 +424,8 @@ Figures figures(const std::vector<RoundPoint>& points, Metric metric, double tar
       const Interval r = paired_ratio_interval(values_of(a, metric), values_of(b, metric)).value_or(Interval{});
       out.flag_over_baseline.push_back({{"N", a.n}, {"backend", a.backend}, {"baseline", b.method},
                                         {"time", time_of(a, metric)}, {"flag_over_baseline", r.estimate},
-                                        {"low", r.low}, {"high", r.high}});
+                                        {"low", r.low}, {"high", r.high}, {"flag_cores_busy", cores_busy(a)},
+                                        {"baseline_cores_busy", cores_busy(b)}});
     }
   }
   // In N order whatever the order of the points (merged shards list theirs shard by shard).
@@ -612,9 +623,13 @@ void print_baselines(const nlohmann::json& doc) {
     if (const auto& w = wall[i]; r["time"] == time_name(true))
       fmt::print("  wall-clock: {:.2f}x [{:.2f}, {:.2f}]", w["flag_over_baseline"].get<double>(), w["low"].get<double>(),
                  w["high"].get<double>());
+    if (r.contains("flag_cores_busy"))
+      fmt::print("  cores busy: FLAG {:.2f}, {} {:.2f}", r["flag_cores_busy"].get<double>(),
+                 (*b)["label"].get<std::string>(), r["baseline_cores_busy"].get<double>());
     fmt::print("\n");
   }
-  fmt::print("  (above 1: FLAG is slower than the baseline, which filters the colour with one fixed disc, no CoC)\n");
+  fmt::print("  (above 1: FLAG is slower than the baseline, which filters the colour with one fixed disc, no CoC; cores "
+             "busy: process CPU time over wall-clock time, medians over the rounds)\n");
 }
 
 // How far the run's processes put the figures apart, against what their rounds imply.
