@@ -305,8 +305,8 @@ std::vector<OptionSpec> flag_options() {
            "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
            "fused, each invocation walking down a column with the layers in registers (buffer scale 1, f32 or "
            "f16, adaptive off; loading only the row samples the tile-max CoC map lets reach its columns): "
-           "the CPU reference's image bit for bit from the same weighted input (a polygon's weights, colour / "
-           "area, may round an ulp apart where the GPU divides otherwise), for CPU devices (lavapipe stores and "
+           "the CPU reference's image bit for bit with the same horizontal_bins (a polygon's CPU reference under "
+           "auto sums in the 3D buffer's scan order, to f32 rounding of it), for CPU devices (lavapipe stores and "
            "loads a texel lane by lane); auto (the default): registers where it runs on a CPU device, any "
            "aperture, else full",
            0, 0, 0, false, flag_layer_buffers(), {1, 2, 3}},
