@@ -193,11 +193,12 @@ const vk::DeviceInfo& software_device() {
   return device;
 }
 
-// How the CPU reference sums a non-disc aperture's horizontal pass: in the scan's order where the
-// binning resolves to scan (auto as on lavapipe: the reference has no device), else by chords.
-FlagShapeSums cpu_shape_sums(const FlagConfig& c, const FlagShapeTable& table) {
-  return flag_shape_binning(c.horizontal_bins, software_device(), table.layers()) ==
-                 FlagHorizontalBins::scan
+// How the CPU reference sums a non-disc aperture's horizontal pass, as lavapipe would (the reference has
+// no device): by chords where its layers are in registers (layer_buffer auto there, which bins by
+// chords), in the scan's order where the 3D buffer's binning resolves to scan.
+FlagShapeSums cpu_shape_sums(const FilterOptions& o, const FlagConfig& c, const FlagShapeTable& table) {
+  if (flag_layer_buffering(o, &software_device()) == FlagLayerBuffer::registers) return FlagShapeSums::chords;
+  return flag_shape_binning(c.horizontal_bins, software_device(), table.layers()) == FlagHorizontalBins::scan
              ? FlagShapeSums::scan
              : FlagShapeSums::chords;
 }
@@ -305,10 +306,9 @@ std::vector<OptionSpec> flag_options() {
            "the full buffer's image bit for bit in a fraction of its memory; registers: no buffer, both passes "
            "fused, each invocation walking down a column with the layers in registers (buffer scale 1, f32 or "
            "f16, adaptive off; loading only the row samples the tile-max CoC map lets reach its columns): "
-           "the CPU reference's image bit for bit with the same horizontal_bins (a polygon's CPU reference under "
-           "auto sums in the 3D buffer's scan order, to f32 rounding of it), for CPU devices (lavapipe stores and "
-           "loads a texel lane by lane); auto (the default): registers where it runs on a CPU device, any "
-           "aperture, else full",
+           "the CPU reference's image bit for bit (which sums a polygon by chords where lavapipe runs it in "
+           "registers), for CPU devices (lavapipe stores and loads a texel lane by lane); auto (the default): "
+           "registers where it runs on a CPU device, any aperture, else full",
            0, 0, 0, false, flag_layer_buffers(), {1, 2, 3}},
           {"band_rows",
            "flag, layer_buffer = streamed: output rows per band (0: auto, the largest band whose ring fits 16 MiB "
@@ -369,7 +369,7 @@ void declare_flag(std::vector<Method>& methods) {
       case CpuPath::shape: {
         const FlagShapeTable table(in.options.aperture, c.pattern);
         return flag_shape_blur(in.color, in.radius_px, table, c.pattern, c.precision, in.threads,
-                               cpu_shape_sums(c, table));
+                               cpu_shape_sums(in.options, c, table));
       }
       case CpuPath::adaptive: return flag_adaptive_cpu(in, c);
       case CpuPath::reduced:

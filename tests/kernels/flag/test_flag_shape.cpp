@@ -498,7 +498,8 @@ TEST(FlagShape, RegistersEqualTheCpuReferenceBitForBit) {
 // scenes mostly in focus most windows are left out, and the image stays the full buffer's with indexed
 // bins (f32: the same layer values summed in the same order) and the CPU reference's with the same bins,
 // bit for bit, for k = 1, 2 and 3, a halved shape (blades6) and both halves (blades5), masked and indexed
-// bins. Below 15 layers (N = 21) the map is not made and every window is loaded.
+// bins; and with the defaults (f16, auto) the CPU reference's, which sums by chords as lavapipe's
+// registers do. Below 15 layers (N = 21) the map is not made and every window is loaded.
 TEST(FlagShape, RegistersLoadOnlyTheSamplesTheAreaMapLetsReach) {
   const Method& flag = find_method("flag");
   for (const std::string scene : {"mostly_in_focus", "points", "half_defocused"})
@@ -530,6 +531,13 @@ TEST(FlagShape, RegistersLoadOnlyTheSamplesTheAreaMapLetsReach) {
           EXPECT_TRUE(test::same_bits(output, expected));
           EXPECT_TRUE(test::same_bits(output, run_cpu(flag, s.color, s.depth_m, lens, registers, 2)));
         }
+        // The defaults as a user runs them (f16, auto: registers on lavapipe, bins as it picks), the CPU
+        // reference summing as lavapipe does.
+        FilterOptions defaults = flag.defaults(pattern);
+        defaults.aperture = full.aperture;
+        EXPECT_TRUE(test::same_bits(run_gpu(context(), flag, s.color, s.depth_m, lens, defaults),
+                                    run_cpu(flag, s.color, s.depth_m, lens, defaults, 2)))
+            << scene << " N " << pattern.size_n << " " << name << " defaults";
       }
 }
 
