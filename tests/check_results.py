@@ -329,8 +329,8 @@ def check_baselines(d, field, software):
     for b in skipped.values():
         assert b["reason"], b
     variant = figure_variant(d)
-    flag_n = {p["N"] for p in d["points"] if p["method"] == "flag" and not variant(p) and p["backend"] == "gpu"}
     flag_at = {p["N"]: p for p in d["points"] if p["method"] == "flag" and not variant(p) and p["backend"] == "gpu"}
+    flag_n = set(flag_at)
 
     def cores_busy(p):  # process CPU time over wall-clock time, medians over the samples
         return statistics.median(p["samples_cpu_ms"]) / statistics.median(p["samples_ms"])
