@@ -8,8 +8,8 @@ plot_figure9.py and plot_tradeoff.py draw it as <prefix>_roofline.
 One panel per backend (its own probes). The slanted line is the copy probe's bandwidth (taps/s = GB/s x
 taps/byte), the flat one the FMA probe's rate at one vec4 multiply-add (8 FLOPs) a tap. The copy probe reads
 and writes; a pass that mostly reads can pass its line where stores cost more than loads (lavapipe stores
-lane by lane: tile_max, which reads a frame and writes a few bytes, reaches 100-110% there). Each pass is one colour and marker, one point per N joined in N's order (the largest N
-labelled); the pass furthest below its nearer ceiling, listed first in the legend, is where time is lost.
+lane by lane: tile_max, which reads a frame and writes a few bytes, reaches 100-110% there). Each pass is one
+colour and marker, one point per N joined in N's order (the largest N labelled); the pass furthest below its nearer ceiling, listed first in the legend, is where time is lost.
 CPU references are timed whole ("frame"). A fused pass (FLAG's layers kept in registers) is drawn again in
 hollow markers at the taps per byte of the unfused passes' bytes (its layers written and read): its speed
 against the copy probe counted as the work of the passes it replaces.
@@ -22,7 +22,7 @@ TAP_FLOPS = 8  # bench/runner/roofline.hpp: kTapFlops
 
 def passes_of(doc, backend):
     """{(method variant precision, pass): [(N, taps_per_byte, taps_per_s, fraction of the nearer ceiling,
-    taps per unfused byte or None)]}."""
+    (taps per unfused byte, fraction_of_copy_unfused) or None)]}."""
     out = {}
     for p in doc["points"]:
         if p["backend"] != backend:
@@ -32,7 +32,8 @@ def passes_of(doc, backend):
         for name, t in p.get("throughput", {}).items():
             if t.get("taps_per_byte") and t.get("taps_per_s"):
                 nearer = max(t.get("fraction_of_copy_bandwidth", 0), t.get("fraction_of_fma_taps", 0))
-                unfused = t["taps_per_s"] / (t["unfused_gb_per_s"] * 1e9) if "unfused_gb_per_s" in t else None
+                unfused = ((t["taps_per_s"] / (t["unfused_gb_per_s"] * 1e9), t.get("fraction_of_copy_unfused", 0))
+                           if "unfused_gb_per_s" in t else None)
                 out.setdefault((what, name), []).append((p["N"], t["taps_per_byte"], t["taps_per_s"], nearer, unfused))
     return {k: sorted(v) for k, v in out.items()}
 
@@ -43,7 +44,7 @@ def panel(ax, doc, backend):
     order = sorted(series, key=lambda k: max(v[3] for v in series[k]))
     markers = bokehplot.markers_for([f"{w} {p}" for w, p in order])
     colours = plt.get_cmap("tab20")
-    xs = [x for s in series.values() for v in s for x in (v[1], v[4]) if x]
+    xs = [x for s in series.values() for v in s for x in (v[1], v[4] and v[4][0]) if x]
     x_lo, x_hi = min(xs) / 3, max(xs) * 3
     copy_gbps, fma_gflops = limits.get(f"{backend}_copy_gb_per_s"), limits.get(f"{backend}_fma_gflop_per_s")
     if copy_gbps:
@@ -57,12 +58,12 @@ def panel(ax, doc, backend):
         label = f"{key[0]} {key[1]} ({100 * max(v[3] for v in pts):.0f}% of a ceiling at best)"
         ax.plot([v[1] for v in pts], [v[2] for v in pts], marker=markers[f"{key[0]} {key[1]}"], ms=5, lw=0.8,
                 color=colours(i % 20), label=label)
-        unfused = [(v[4], v[2]) for v in pts if v[4]]
+        unfused = [(v[4][0], v[2], v[4][1]) for v in pts if v[4]]
         if unfused:
-            share = max(v[2] / (v[4] * copy_gbps * 1e9) for v in pts if v[4]) if copy_gbps else 0
             ax.plot([u[0] for u in unfused], [u[1] for u in unfused], marker=markers[f"{key[0]} {key[1]}"], ms=5,
                     lw=0.8, ls=":", mfc="none", color=colours(i % 20),
-                    label=f"{key[0]} {key[1]} counted as the unfused passes' bytes ({100 * share:.0f}% of copy at best)")
+                    label=f"{key[0]} {key[1]} counted as the unfused passes' bytes "
+                          f"({100 * max(u[2] for u in unfused):.0f}% of copy at best)")
         n, x, y = pts[-1][:3]
         ax.annotate(f"N={n}", (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points", color=colours(i % 20))
     ax.set_xscale("log")

@@ -37,8 +37,12 @@ layout(constant_id = 2) const int SPACING = 2;  // k, a constant divisor for dis
 layout(constant_id = 8) const bool BOTH_HALVES = false;
 layout(std430, binding = 2) readonly buffer Chords { int chords[]; };  // FlagShapeTable::chords
 const int HALF = BOTH_HALVES ? (LAYERS - 1) / 2 : LAYERS - 1;          // n
-// The smallest area that reaches lattice column `column` or beyond (the table's reach, after the chords).
-int reach_area(int column) { return chords[(2 * HALF + 1) * ((2 * HALF + 1) * (2 * HALF + 1) + 1) + column]; }
+// The smallest area whose shape reaches, from sample s, the nearest of the subgroup's columns first ..
+// last or a column beyond it: the table's reach (after the chords) at lattice column n - (offset to it).
+int reach_area(int s, int first, int last) {
+  const int side = 2 * HALF + 1;
+  return chords[side * (side * side + 1) + HALF - (s - clamp(s, first, last))];
+}
 #define TILES_BINDING 3
 #else
 const bool BOTH_HALVES = false;
@@ -122,8 +126,8 @@ uvec2 reaching_windows(int window0, int first, int last, ivec2 batch, int tile_y
       for (int tile_x = (phase_x + a * k) / TILE_PX; tile_x <= (phase_x + b * k) / TILE_PX; ++tile_x)
         m = max(m, tiles[tile_element(ivec2(tile_x, tile_y))].x);
 #if SHAPE
-    // Table column n - i of the offset i = sample - column from the window's nearest sample.
-    const bool reaches = m >= reach_area(b < first ? n + first - b : (a > last ? n - a + last : n));
+    // From the window's sample nearest to the subgroup's columns.
+    const bool reaches = m >= reach_area(clamp(first, a, b), first, last);
 #else
     const bool reaches = m >= gap * gap;
 #endif
@@ -193,7 +197,7 @@ void main() {
           const int index = int(coc_l);  // its row of the chord table
           // Else no column's pattern holds it, or its shape reaches neither the nearest of the
           // subgroup's columns nor those beyond (the table's reach, after the chords).
-          if (gap <= n && index >= reach_area(n - (s - clamp(s, first, last)))) index_l = index;
+          if (gap <= n && index >= reach_area(s, first, last)) index_l = index;
 #else
           const int index = disc_index(coc_l * coc_l, k, 2 * n * n);
           // Else no column's pattern holds it, or its disc misses them.
